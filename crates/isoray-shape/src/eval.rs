@@ -1,0 +1,482 @@
+//! Evaluators over a [`Tape`]: one point, a batch of points, and gradients.
+//!
+//! * [`PointEvaluator`] runs the tape on one point, in any [`Num`] (f32, f64,
+//!   or a [`Dual`] number for forward-mode automatic differentiation).
+//! * [`BatchEvaluator`] is the hot path of rendering: it runs each instruction
+//!   over a block of [`LANES`] points stored as structure-of-arrays, so the
+//!   inner loops are straight-line arithmetic the compiler vectorises. It
+//!   allocates only when it is created.
+//! * [`gradient`] and [`BatchEvaluator::gradients`] give the gradient by
+//!   automatic differentiation or by finite differences ([`GradientMode`]).
+
+use crate::ir::{apply_binary, apply_unary, sign, BinOp, Instr, Tape, UnOp};
+
+/// Number of points a [`BatchEvaluator`] processes per pass over the tape.
+pub const LANES: usize = 64;
+
+/// A number type the point evaluator can run on.
+pub trait Num: Copy {
+    /// Converts a constant.
+    fn from_f64(v: f64) -> Self;
+    /// The plain value (used for `select`'s comparison).
+    fn value(self) -> f64;
+    /// Applies a unary operation.
+    fn unary(op: UnOp, a: Self) -> Self;
+    /// Applies a binary operation.
+    fn binary(op: BinOp, a: Self, b: Self) -> Self;
+}
+
+impl Num for f64 {
+    fn from_f64(v: f64) -> Self {
+        v
+    }
+    fn value(self) -> f64 {
+        self
+    }
+    fn unary(op: UnOp, a: Self) -> Self {
+        apply_unary(op, a)
+    }
+    fn binary(op: BinOp, a: Self, b: Self) -> Self {
+        apply_binary(op, a, b)
+    }
+}
+
+impl Num for f32 {
+    fn from_f64(v: f64) -> Self {
+        v as f32
+    }
+    fn value(self) -> f64 {
+        self as f64
+    }
+    fn unary(op: UnOp, a: Self) -> Self {
+        unary_f32(op, a)
+    }
+    fn binary(op: BinOp, a: Self, b: Self) -> Self {
+        binary_f32(op, a, b)
+    }
+}
+
+#[inline(always)]
+fn unary_f32(op: UnOp, x: f32) -> f32 {
+    match op {
+        UnOp::Neg => -x,
+        UnOp::Abs => x.abs(),
+        UnOp::Sqrt => x.sqrt(),
+        UnOp::Square => x * x,
+        UnOp::Sin => x.sin(),
+        UnOp::Cos => x.cos(),
+        UnOp::Tan => x.tan(),
+        UnOp::Asin => x.asin(),
+        UnOp::Acos => x.acos(),
+        UnOp::Atan => x.atan(),
+        UnOp::Exp => x.exp(),
+        UnOp::Ln => x.ln(),
+        UnOp::Floor => x.floor(),
+        UnOp::Round => x.round(),
+        UnOp::Sign => sign(x as f64) as f32,
+    }
+}
+
+#[inline(always)]
+fn binary_f32(op: BinOp, a: f32, b: f32) -> f32 {
+    match op {
+        BinOp::Add => a + b,
+        BinOp::Sub => a - b,
+        BinOp::Mul => a * b,
+        BinOp::Div => a / b,
+        BinOp::Min => a.min(b),
+        BinOp::Max => a.max(b),
+        BinOp::Pow => a.powf(b),
+        BinOp::Atan2 => a.atan2(b),
+    }
+}
+
+/// A dual number: a value and its partial derivatives with respect to x, y, z.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Dual {
+    /// The value.
+    pub v: f64,
+    /// ∂/∂x, ∂/∂y, ∂/∂z.
+    pub d: [f64; 3],
+}
+
+impl Dual {
+    fn scale(self, k: f64) -> [f64; 3] {
+        [self.d[0] * k, self.d[1] * k, self.d[2] * k]
+    }
+    fn with(v: f64, d: [f64; 3]) -> Dual {
+        Dual { v, d }
+    }
+}
+
+impl Num for Dual {
+    fn from_f64(v: f64) -> Self {
+        Dual { v, d: [0.0; 3] }
+    }
+    fn value(self) -> f64 {
+        self.v
+    }
+    fn unary(op: UnOp, a: Self) -> Self {
+        let v = apply_unary(op, a.v);
+        let k = match op {
+            UnOp::Neg => -1.0,
+            UnOp::Abs => {
+                if a.v < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                }
+            }
+            UnOp::Sqrt => {
+                if v > 0.0 {
+                    0.5 / v
+                } else {
+                    0.0
+                }
+            }
+            UnOp::Square => 2.0 * a.v,
+            UnOp::Sin => a.v.cos(),
+            UnOp::Cos => -a.v.sin(),
+            UnOp::Tan => 1.0 + v * v,
+            UnOp::Asin => 1.0 / (1.0 - a.v * a.v).sqrt(),
+            UnOp::Acos => -1.0 / (1.0 - a.v * a.v).sqrt(),
+            UnOp::Atan => 1.0 / (1.0 + a.v * a.v),
+            UnOp::Exp => v,
+            UnOp::Ln => 1.0 / a.v,
+            UnOp::Floor | UnOp::Round | UnOp::Sign => 0.0,
+        };
+        Dual::with(v, a.scale(k))
+    }
+    fn binary(op: BinOp, a: Self, b: Self) -> Self {
+        let v = apply_binary(op, a.v, b.v);
+        let lin = |ka: f64, kb: f64| {
+            [
+                a.d[0] * ka + b.d[0] * kb,
+                a.d[1] * ka + b.d[1] * kb,
+                a.d[2] * ka + b.d[2] * kb,
+            ]
+        };
+        let d = match op {
+            BinOp::Add => lin(1.0, 1.0),
+            BinOp::Sub => lin(1.0, -1.0),
+            BinOp::Mul => lin(b.v, a.v),
+            BinOp::Div => lin(1.0 / b.v, -a.v / (b.v * b.v)),
+            BinOp::Min => {
+                if a.v <= b.v {
+                    a.d
+                } else {
+                    b.d
+                }
+            }
+            BinOp::Max => {
+                if a.v >= b.v {
+                    a.d
+                } else {
+                    b.d
+                }
+            }
+            BinOp::Pow => {
+                let ka = if b.v == 0.0 { 0.0 } else { b.v * a.v.powf(b.v - 1.0) };
+                let kb = if a.v > 0.0 { v * a.v.ln() } else { 0.0 };
+                lin(ka, kb)
+            }
+            BinOp::Atan2 => {
+                let r2 = a.v * a.v + b.v * b.v;
+                if r2 > 0.0 {
+                    lin(b.v / r2, -a.v / r2)
+                } else {
+                    [0.0; 3]
+                }
+            }
+        };
+        Dual::with(v, d)
+    }
+}
+
+/// Runs a tape on single points.
+#[derive(Debug, Clone)]
+pub struct PointEvaluator<'t, T: Num> {
+    tape: &'t Tape,
+    slots: Vec<T>,
+}
+
+impl<'t, T: Num> PointEvaluator<'t, T> {
+    /// An evaluator for `tape` (allocates its slots once).
+    pub fn new(tape: &'t Tape) -> Self {
+        let mut slots = vec![T::from_f64(0.0); tape.slots()];
+        for &(s, v) in tape.constants() {
+            slots[s as usize] = T::from_f64(v);
+        }
+        PointEvaluator { tape, slots }
+    }
+
+    /// The value at (x, y, z).
+    pub fn eval(&mut self, x: T, y: T, z: T) -> T {
+        let s = &mut self.slots;
+        s[0] = x;
+        s[1] = y;
+        s[2] = z;
+        for ins in self.tape.instrs() {
+            match *ins {
+                Instr::Unary { op, out, a } => s[out as usize] = T::unary(op, s[a as usize]),
+                Instr::Binary { op, out, a, b } => s[out as usize] = T::binary(op, s[a as usize], s[b as usize]),
+                Instr::Select { out, c, a, b } => {
+                    s[out as usize] = if s[c as usize].value() > 0.0 { s[a as usize] } else { s[b as usize] }
+                }
+            }
+        }
+        s[self.tape.output()]
+    }
+}
+
+/// How a gradient is computed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GradientMode {
+    /// Forward-mode automatic differentiation (exact up to rounding).
+    Dual,
+    /// Central differences, 6 evaluations, step `h`.
+    Central(f64),
+    /// Forward differences, 4 evaluations (f(p) included), step `h`.
+    Forward(f64),
+    /// The tetrahedron technique, 4 evaluations, step `h`.
+    Tetrahedron(f64),
+}
+
+/// The four tetrahedron directions (±1, ±1, ±1) with an odd number of minus signs.
+pub const TETRAHEDRON: [[f64; 3]; 4] = [[1.0, -1.0, -1.0], [-1.0, -1.0, 1.0], [-1.0, 1.0, -1.0], [1.0, 1.0, 1.0]];
+
+/// The offsets (relative to the point, in units of h) at which a finite
+/// difference mode samples, and the weights turning samples into ∂/∂x,y,z:
+/// grad_j = Σ_i w_i[j] f(p + h·o_i) / h.
+pub fn stencil(mode: GradientMode) -> Vec<([f64; 3], [f64; 3])> {
+    match mode {
+        GradientMode::Dual => Vec::new(),
+        GradientMode::Central(_) => vec![
+            ([1.0, 0.0, 0.0], [0.5, 0.0, 0.0]),
+            ([-1.0, 0.0, 0.0], [-0.5, 0.0, 0.0]),
+            ([0.0, 1.0, 0.0], [0.0, 0.5, 0.0]),
+            ([0.0, -1.0, 0.0], [0.0, -0.5, 0.0]),
+            ([0.0, 0.0, 1.0], [0.0, 0.0, 0.5]),
+            ([0.0, 0.0, -1.0], [0.0, 0.0, -0.5]),
+        ],
+        GradientMode::Forward(_) => vec![
+            ([0.0, 0.0, 0.0], [-1.0, -1.0, -1.0]),
+            ([1.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
+            ([0.0, 1.0, 0.0], [0.0, 1.0, 0.0]),
+            ([0.0, 0.0, 1.0], [0.0, 0.0, 1.0]),
+        ],
+        // Σ_i k_i f(p + h k_i) = 4 h ∇f + O(h³), so the weights are k_i / 4.
+        GradientMode::Tetrahedron(_) => TETRAHEDRON.iter().map(|k| (*k, [k[0] * 0.25, k[1] * 0.25, k[2] * 0.25])).collect(),
+    }
+}
+
+fn step_of(mode: GradientMode) -> f64 {
+    match mode {
+        GradientMode::Dual => 0.0,
+        GradientMode::Central(h) | GradientMode::Forward(h) | GradientMode::Tetrahedron(h) => h,
+    }
+}
+
+/// The gradient of the tape at one point.
+pub fn gradient(tape: &Tape, p: [f64; 3], mode: GradientMode) -> [f64; 3] {
+    if mode == GradientMode::Dual {
+        let mut e = PointEvaluator::<Dual>::new(tape);
+        let x = Dual::with(p[0], [1.0, 0.0, 0.0]);
+        let y = Dual::with(p[1], [0.0, 1.0, 0.0]);
+        let z = Dual::with(p[2], [0.0, 0.0, 1.0]);
+        return e.eval(x, y, z).d;
+    }
+    let h = step_of(mode);
+    let mut e = PointEvaluator::<f64>::new(tape);
+    let mut g = [0.0; 3];
+    for (o, w) in stencil(mode) {
+        let f = e.eval(p[0] + h * o[0], p[1] + h * o[1], p[2] + h * o[2]);
+        for j in 0..3 {
+            g[j] += w[j] * f / h;
+        }
+    }
+    g
+}
+
+/// Scalar types the batch evaluator runs on (f32 for rendering, f64 for precision).
+pub trait BatchNum: Num + Default + PartialOrd + std::ops::Add<Output = Self> + std::ops::Mul<Output = Self> + std::ops::Div<Output = Self> + Send + Sync {}
+impl BatchNum for f32 {}
+impl BatchNum for f64 {}
+
+/// Runs a tape over many points at once (structure of arrays).
+#[derive(Debug, Clone)]
+pub struct BatchEvaluator<'t, T: BatchNum> {
+    tape: &'t Tape,
+    slots: Vec<T>,
+    /// Scratch for gradient stencils.
+    scratch: [Vec<T>; 4],
+}
+
+impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
+    /// An evaluator for `tape`; allocates its working memory once.
+    pub fn new(tape: &'t Tape) -> Self {
+        let mut slots = vec![T::default(); tape.slots() * LANES];
+        for &(s, v) in tape.constants() {
+            slots[s as usize * LANES..(s as usize + 1) * LANES].fill(T::from_f64(v));
+        }
+        BatchEvaluator {
+            tape,
+            slots,
+            scratch: Default::default(),
+        }
+    }
+
+    /// The tape this evaluator runs.
+    pub fn tape(&self) -> &'t Tape {
+        self.tape
+    }
+
+    /// Evaluates at the points (xs[i], ys[i], zs[i]) into `out[i]`.
+    /// All four slices must have the same length (the shortest is used).
+    pub fn eval(&mut self, xs: &[T], ys: &[T], zs: &[T], out: &mut [T]) {
+        let n = xs.len().min(ys.len()).min(zs.len()).min(out.len());
+        let mut i = 0;
+        while i < n {
+            let m = (n - i).min(LANES);
+            self.slots[..m].copy_from_slice(&xs[i..i + m]);
+            self.slots[LANES..LANES + m].copy_from_slice(&ys[i..i + m]);
+            self.slots[2 * LANES..2 * LANES + m].copy_from_slice(&zs[i..i + m]);
+            self.run(m);
+            let o = self.tape.output() * LANES;
+            out[i..i + m].copy_from_slice(&self.slots[o..o + m]);
+            i += m;
+        }
+    }
+
+    fn run(&mut self, m: usize) {
+        debug_assert!(m <= LANES);
+        let base = self.slots.as_mut_ptr();
+        let len = self.slots.len();
+        for ins in self.tape.instrs() {
+            // SAFETY: every slot index is below `tape.slots()` (checked below in
+            // debug builds, guaranteed by `Tape::extract`), so each block of LANES
+            // elements lies inside `slots`; and no instruction writes a slot it
+            // reads (also guaranteed by `Tape::extract`), so the mutable block
+            // never overlaps the shared ones.
+            unsafe {
+                let blk = |s: u32| {
+                    debug_assert!((s as usize + 1) * LANES <= len);
+                    &*(base.add(s as usize * LANES) as *const [T; LANES])
+                };
+                let blk_mut = |s: u32| {
+                    debug_assert!((s as usize + 1) * LANES <= len);
+                    &mut *(base.add(s as usize * LANES) as *mut [T; LANES])
+                };
+                match *ins {
+                    Instr::Unary { op, out, a } => {
+                        let (o, a) = (blk_mut(out), blk(a));
+                        unary_block(op, &mut o[..m], &a[..m]);
+                    }
+                    Instr::Binary { op, out, a, b } => {
+                        let (o, a, b) = (blk_mut(out), blk(a), blk(b));
+                        binary_block(op, &mut o[..m], &a[..m], &b[..m]);
+                    }
+                    Instr::Select { out, c, a, b } => {
+                        let (o, c, a, b) = (blk_mut(out), blk(c), blk(a), blk(b));
+                        for l in 0..m {
+                            o[l] = if c[l] > T::default() { a[l] } else { b[l] };
+                        }
+                    }
+                }
+            }
+        }
+        let _ = len;
+    }
+
+    /// Gradients at the points by finite differences (or dual numbers) into
+    /// `gx, gy, gz`. `mode` chooses the stencil; for the finite-difference
+    /// modes its step is in world units.
+    #[allow(clippy::too_many_arguments)]
+    pub fn gradients(&mut self, xs: &[T], ys: &[T], zs: &[T], mode: GradientMode, gx: &mut [T], gy: &mut [T], gz: &mut [T]) {
+        let n = xs.len().min(ys.len()).min(zs.len()).min(gx.len()).min(gy.len()).min(gz.len());
+        if mode == GradientMode::Dual {
+            let mut e = PointEvaluator::<Dual>::new(self.tape);
+            for i in 0..n {
+                let g = e
+                    .eval(
+                        Dual::with(xs[i].value(), [1.0, 0.0, 0.0]),
+                        Dual::with(ys[i].value(), [0.0, 1.0, 0.0]),
+                        Dual::with(zs[i].value(), [0.0, 0.0, 1.0]),
+                    )
+                    .d;
+                gx[i] = T::from_f64(g[0]);
+                gy[i] = T::from_f64(g[1]);
+                gz[i] = T::from_f64(g[2]);
+            }
+            return;
+        }
+        let h = step_of(mode);
+        let inv_h = T::from_f64(1.0 / h);
+        gx[..n].fill(T::default());
+        gy[..n].fill(T::default());
+        gz[..n].fill(T::default());
+        let mut scratch = std::mem::take(&mut self.scratch);
+        for s in scratch.iter_mut() {
+            s.resize(n, T::default());
+        }
+        for (o, w) in stencil(mode) {
+            let [sx, sy, sz, sf] = &mut scratch;
+            let (ox, oy, oz) = (T::from_f64(h * o[0]), T::from_f64(h * o[1]), T::from_f64(h * o[2]));
+            for i in 0..n {
+                sx[i] = xs[i] + ox;
+                sy[i] = ys[i] + oy;
+                sz[i] = zs[i] + oz;
+            }
+            self.eval(sx, sy, sz, sf);
+            let (wx, wy, wz) = (T::from_f64(w[0]), T::from_f64(w[1]), T::from_f64(w[2]));
+            for i in 0..n {
+                let f = sf[i] * inv_h;
+                gx[i] = gx[i] + wx * f;
+                gy[i] = gy[i] + wy * f;
+                gz[i] = gz[i] + wz * f;
+            }
+        }
+        self.scratch = scratch;
+    }
+}
+
+#[inline(always)]
+fn unary_block<T: Num>(op: UnOp, o: &mut [T], a: &[T]) {
+    macro_rules! each {
+        ($f:expr) => {{
+            let f = $f;
+            for (o, &a) in o.iter_mut().zip(a) {
+                *o = f(a);
+            }
+        }};
+    }
+    match op {
+        UnOp::Neg => each!(|x| T::unary(UnOp::Neg, x)),
+        UnOp::Abs => each!(|x| T::unary(UnOp::Abs, x)),
+        UnOp::Sqrt => each!(|x| T::unary(UnOp::Sqrt, x)),
+        UnOp::Square => each!(|x| T::unary(UnOp::Square, x)),
+        UnOp::Floor => each!(|x| T::unary(UnOp::Floor, x)),
+        op => each!(|x| T::unary(op, x)),
+    }
+}
+
+#[inline(always)]
+fn binary_block<T: Num>(op: BinOp, o: &mut [T], a: &[T], b: &[T]) {
+    macro_rules! each {
+        ($f:expr) => {{
+            let f = $f;
+            for ((o, &a), &b) in o.iter_mut().zip(a).zip(b) {
+                *o = f(a, b);
+            }
+        }};
+    }
+    match op {
+        BinOp::Add => each!(|x, y| T::binary(BinOp::Add, x, y)),
+        BinOp::Sub => each!(|x, y| T::binary(BinOp::Sub, x, y)),
+        BinOp::Mul => each!(|x, y| T::binary(BinOp::Mul, x, y)),
+        BinOp::Div => each!(|x, y| T::binary(BinOp::Div, x, y)),
+        BinOp::Min => each!(|x, y| T::binary(BinOp::Min, x, y)),
+        BinOp::Max => each!(|x, y| T::binary(BinOp::Max, x, y)),
+        op => each!(|x, y| T::binary(op, x, y)),
+    }
+}

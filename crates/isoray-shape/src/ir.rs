@@ -1,0 +1,632 @@
+//! The shape IR: a hash-consed DAG of scalar operations.
+//!
+//! The typed language (floats and vectors) is lowered to scalars here; a
+//! vector is just two or three nodes. Every node is created through
+//! [`Builder`], which folds constants, applies a few algebraic identities and
+//! shares identical subexpressions, so that each distinct computation appears
+//! once. [`Builder::tape`] then extracts the nodes one output needs, in
+//! evaluation order, with slots allocated for a small working set.
+
+use std::collections::HashMap;
+
+/// A node of the DAG (an index into the builder).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Node(pub u32);
+
+/// One-argument operations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum UnOp {
+    /// −x
+    Neg,
+    /// |x|
+    Abs,
+    /// √x
+    Sqrt,
+    /// x²
+    Square,
+    /// sin x
+    Sin,
+    /// cos x
+    Cos,
+    /// tan x
+    Tan,
+    /// asin x
+    Asin,
+    /// acos x
+    Acos,
+    /// atan x
+    Atan,
+    /// eˣ
+    Exp,
+    /// ln x
+    Ln,
+    /// ⌊x⌋
+    Floor,
+    /// nearest integer, halves away from zero
+    Round,
+    /// −1, 0 or 1
+    Sign,
+}
+
+/// Two-argument operations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BinOp {
+    /// a + b
+    Add,
+    /// a − b
+    Sub,
+    /// a · b
+    Mul,
+    /// a / b
+    Div,
+    /// min(a, b)
+    Min,
+    /// max(a, b)
+    Max,
+    /// aᵇ
+    Pow,
+    /// atan2(a, b) = atan(a / b) in the right quadrant
+    Atan2,
+}
+
+/// An operation of the DAG.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Op {
+    /// A constant.
+    Const(f64),
+    /// The x coordinate of the evaluated point.
+    X,
+    /// The y coordinate.
+    Y,
+    /// The z coordinate.
+    Z,
+    /// A unary operation.
+    Unary(UnOp, Node),
+    /// A binary operation.
+    Binary(BinOp, Node, Node),
+    /// `if c > 0 { a } else { b }`
+    Select(Node, Node, Node),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Key {
+    Const(u64),
+    X,
+    Y,
+    Z,
+    Unary(UnOp, Node),
+    Binary(BinOp, Node, Node),
+    Select(Node, Node, Node),
+}
+
+impl Op {
+    fn key(&self) -> Key {
+        match *self {
+            Op::Const(v) => Key::Const(v.to_bits()),
+            Op::X => Key::X,
+            Op::Y => Key::Y,
+            Op::Z => Key::Z,
+            Op::Unary(o, a) => Key::Unary(o, a),
+            Op::Binary(o, a, b) => Key::Binary(o, a, b),
+            Op::Select(c, a, b) => Key::Select(c, a, b),
+        }
+    }
+}
+
+/// Applies a unary operation to a number (the reference semantics every
+/// evaluator follows).
+pub fn apply_unary(op: UnOp, x: f64) -> f64 {
+    match op {
+        UnOp::Neg => -x,
+        UnOp::Abs => x.abs(),
+        UnOp::Sqrt => x.sqrt(),
+        UnOp::Square => x * x,
+        UnOp::Sin => x.sin(),
+        UnOp::Cos => x.cos(),
+        UnOp::Tan => x.tan(),
+        UnOp::Asin => x.asin(),
+        UnOp::Acos => x.acos(),
+        UnOp::Atan => x.atan(),
+        UnOp::Exp => x.exp(),
+        UnOp::Ln => x.ln(),
+        UnOp::Floor => x.floor(),
+        UnOp::Round => x.round(),
+        UnOp::Sign => sign(x),
+    }
+}
+
+/// GLSL `sign`: −1, 0 or 1 (NaN stays NaN).
+pub fn sign(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        x
+    }
+}
+
+/// Applies a binary operation to numbers.
+pub fn apply_binary(op: BinOp, a: f64, b: f64) -> f64 {
+    match op {
+        BinOp::Add => a + b,
+        BinOp::Sub => a - b,
+        BinOp::Mul => a * b,
+        BinOp::Div => a / b,
+        BinOp::Min => a.min(b),
+        BinOp::Max => a.max(b),
+        BinOp::Pow => a.powf(b),
+        BinOp::Atan2 => a.atan2(b),
+    }
+}
+
+/// Builds the DAG. Identical operations on identical operands are created
+/// once; operations on constants are folded.
+#[derive(Debug, Default, Clone)]
+pub struct Builder {
+    ops: Vec<Op>,
+    dedup: HashMap<Key, Node>,
+}
+
+impl Builder {
+    /// An empty builder.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Number of distinct nodes so far.
+    pub fn len(&self) -> usize {
+        self.ops.len()
+    }
+
+    /// True when no node exists yet.
+    pub fn is_empty(&self) -> bool {
+        self.ops.is_empty()
+    }
+
+    /// The operation of a node.
+    pub fn op(&self, n: Node) -> Op {
+        self.ops[n.0 as usize]
+    }
+
+    /// The value of a node if it is a constant.
+    pub fn const_value(&self, n: Node) -> Option<f64> {
+        match self.op(n) {
+            Op::Const(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    fn intern(&mut self, op: Op) -> Node {
+        let key = op.key();
+        if let Some(&n) = self.dedup.get(&key) {
+            return n;
+        }
+        let n = Node(self.ops.len() as u32);
+        self.ops.push(op);
+        self.dedup.insert(key, n);
+        n
+    }
+
+    /// A constant.
+    pub fn constant(&mut self, v: f64) -> Node {
+        self.intern(Op::Const(v))
+    }
+    /// The point's x.
+    pub fn x(&mut self) -> Node {
+        self.intern(Op::X)
+    }
+    /// The point's y.
+    pub fn y(&mut self) -> Node {
+        self.intern(Op::Y)
+    }
+    /// The point's z.
+    pub fn z(&mut self) -> Node {
+        self.intern(Op::Z)
+    }
+
+    /// A unary operation, folded when its operand is constant.
+    pub fn unary(&mut self, op: UnOp, a: Node) -> Node {
+        if let Some(v) = self.const_value(a) {
+            return self.constant(apply_unary(op, v));
+        }
+        match (op, self.op(a)) {
+            (UnOp::Neg, Op::Unary(UnOp::Neg, inner)) => return inner,
+            (UnOp::Abs, Op::Unary(UnOp::Abs | UnOp::Square | UnOp::Sqrt | UnOp::Exp, _)) => return a,
+            (UnOp::Abs, Op::Unary(UnOp::Neg, inner)) => return self.unary(UnOp::Abs, inner),
+            (UnOp::Square, Op::Unary(UnOp::Neg | UnOp::Abs, inner)) => return self.unary(UnOp::Square, inner),
+            _ => {}
+        }
+        self.intern(Op::Unary(op, a))
+    }
+
+    /// A binary operation, folded and simplified where that is exact.
+    pub fn binary(&mut self, op: BinOp, a: Node, b: Node) -> Node {
+        let (ca, cb) = (self.const_value(a), self.const_value(b));
+        if let (Some(x), Some(y)) = (ca, cb) {
+            return self.constant(apply_binary(op, x, y));
+        }
+        match op {
+            BinOp::Add => {
+                if ca == Some(0.0) {
+                    return b;
+                }
+                if cb == Some(0.0) {
+                    return a;
+                }
+                if let Op::Unary(UnOp::Neg, nb) = self.op(b) {
+                    return self.binary(BinOp::Sub, a, nb);
+                }
+            }
+            BinOp::Sub => {
+                if cb == Some(0.0) {
+                    return a;
+                }
+                if ca == Some(0.0) {
+                    return self.unary(UnOp::Neg, b);
+                }
+                if let Op::Unary(UnOp::Neg, nb) = self.op(b) {
+                    return self.binary(BinOp::Add, a, nb);
+                }
+            }
+            BinOp::Mul => {
+                if ca == Some(1.0) {
+                    return b;
+                }
+                if cb == Some(1.0) {
+                    return a;
+                }
+                if ca == Some(-1.0) {
+                    return self.unary(UnOp::Neg, b);
+                }
+                if cb == Some(-1.0) {
+                    return self.unary(UnOp::Neg, a);
+                }
+                if a == b {
+                    return self.unary(UnOp::Square, a);
+                }
+            }
+            BinOp::Div => {
+                if cb == Some(1.0) {
+                    return a;
+                }
+                // Division by a constant power of two is exact as a multiplication.
+                if let Some(y) = cb {
+                    let r = 1.0 / y;
+                    if y != 0.0 && r.is_finite() && (r * y == 1.0) && y.abs().log2().fract() == 0.0 {
+                        let rc = self.constant(r);
+                        return self.binary(BinOp::Mul, a, rc);
+                    }
+                }
+            }
+            BinOp::Min | BinOp::Max => {
+                if a == b {
+                    return a;
+                }
+            }
+            BinOp::Pow => {
+                if cb == Some(1.0) {
+                    return a;
+                }
+                if cb == Some(2.0) {
+                    return self.unary(UnOp::Square, a);
+                }
+                if cb == Some(0.5) {
+                    return self.unary(UnOp::Sqrt, a);
+                }
+            }
+            BinOp::Atan2 => {}
+        }
+        // Canonical operand order for commutative operations improves sharing.
+        let (a, b) = match op {
+            BinOp::Add | BinOp::Mul | BinOp::Min | BinOp::Max if b < a => (b, a),
+            _ => (a, b),
+        };
+        self.intern(Op::Binary(op, a, b))
+    }
+
+    /// `if c > 0 { a } else { b }`, folded when `c` is constant.
+    pub fn select(&mut self, c: Node, a: Node, b: Node) -> Node {
+        if let Some(v) = self.const_value(c) {
+            return if v > 0.0 { a } else { b };
+        }
+        if a == b {
+            return a;
+        }
+        self.intern(Op::Select(c, a, b))
+    }
+
+    /// Shorthands.
+    pub fn add(&mut self, a: Node, b: Node) -> Node {
+        self.binary(BinOp::Add, a, b)
+    }
+    /// a − b
+    pub fn sub(&mut self, a: Node, b: Node) -> Node {
+        self.binary(BinOp::Sub, a, b)
+    }
+    /// a · b
+    pub fn mul(&mut self, a: Node, b: Node) -> Node {
+        self.binary(BinOp::Mul, a, b)
+    }
+    /// a / b
+    pub fn div(&mut self, a: Node, b: Node) -> Node {
+        self.binary(BinOp::Div, a, b)
+    }
+    /// min(a, b)
+    pub fn min(&mut self, a: Node, b: Node) -> Node {
+        self.binary(BinOp::Min, a, b)
+    }
+    /// max(a, b)
+    pub fn max(&mut self, a: Node, b: Node) -> Node {
+        self.binary(BinOp::Max, a, b)
+    }
+    /// −a
+    pub fn neg(&mut self, a: Node) -> Node {
+        self.unary(UnOp::Neg, a)
+    }
+    /// |a|
+    pub fn abs(&mut self, a: Node) -> Node {
+        self.unary(UnOp::Abs, a)
+    }
+    /// √a
+    pub fn sqrt(&mut self, a: Node) -> Node {
+        self.unary(UnOp::Sqrt, a)
+    }
+    /// a²
+    pub fn square(&mut self, a: Node) -> Node {
+        self.unary(UnOp::Square, a)
+    }
+    /// a · c for a constant c
+    pub fn mul_c(&mut self, a: Node, c: f64) -> Node {
+        let c = self.constant(c);
+        self.mul(a, c)
+    }
+    /// a + c for a constant c
+    pub fn add_c(&mut self, a: Node, c: f64) -> Node {
+        let c = self.constant(c);
+        self.add(a, c)
+    }
+    /// clamp(a, lo, hi) = min(max(a, lo), hi)
+    pub fn clamp(&mut self, a: Node, lo: Node, hi: Node) -> Node {
+        let m = self.max(a, lo);
+        self.min(m, hi)
+    }
+
+    /// Extracts the nodes that `output` depends on as an evaluation tape.
+    pub fn tape(&self, output: Node) -> Tape {
+        Tape::extract(&self.ops, output)
+    }
+}
+
+/// A tape instruction: an operation writing `out` from slots.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Instr {
+    /// `out = op(a)`
+    Unary {
+        /// the operation
+        op: UnOp,
+        /// destination slot
+        out: u32,
+        /// operand slot
+        a: u32,
+    },
+    /// `out = op(a, b)`
+    Binary {
+        /// the operation
+        op: BinOp,
+        /// destination slot
+        out: u32,
+        /// left operand slot
+        a: u32,
+        /// right operand slot
+        b: u32,
+    },
+    /// `out = if c > 0 { a } else { b }`
+    Select {
+        /// destination slot
+        out: u32,
+        /// condition slot
+        c: u32,
+        /// slot taken when c > 0
+        a: u32,
+        /// slot taken otherwise
+        b: u32,
+    },
+}
+
+/// A linear program computing one scalar from (x, y, z).
+///
+/// Slots 0, 1 and 2 hold x, y and z; constants follow, each in its own slot;
+/// the remaining slots are reused by the instructions. No instruction writes
+/// a slot it reads, so evaluators may borrow inputs and output disjointly.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tape {
+    constants: Vec<(u32, f64)>,
+    instrs: Vec<Instr>,
+    slots: u32,
+    output: u32,
+}
+
+impl Tape {
+    fn extract(ops: &[Op], output: Node) -> Tape {
+        let n = output.0 as usize + 1;
+        // Liveness: which nodes the output needs, and the last instruction using each.
+        let mut needed = vec![false; n];
+        needed[output.0 as usize] = true;
+        for i in (0..n).rev() {
+            if !needed[i] {
+                continue;
+            }
+            match ops[i] {
+                Op::Unary(_, a) => needed[a.0 as usize] = true,
+                Op::Binary(_, a, b) => {
+                    needed[a.0 as usize] = true;
+                    needed[b.0 as usize] = true;
+                }
+                Op::Select(c, a, b) => {
+                    needed[c.0 as usize] = true;
+                    needed[a.0 as usize] = true;
+                    needed[b.0 as usize] = true;
+                }
+                _ => {}
+            }
+        }
+        let mut last_use = vec![0usize; n];
+        for i in 0..n {
+            if !needed[i] {
+                continue;
+            }
+            let mut touch = |m: Node| last_use[m.0 as usize] = i;
+            match ops[i] {
+                Op::Unary(_, a) => touch(a),
+                Op::Binary(_, a, b) => {
+                    touch(a);
+                    touch(b);
+                }
+                Op::Select(c, a, b) => {
+                    touch(c);
+                    touch(a);
+                    touch(b);
+                }
+                _ => {}
+            }
+        }
+        last_use[output.0 as usize] = usize::MAX;
+
+        let mut slot_of = vec![u32::MAX; n];
+        let mut constants = Vec::new();
+        let mut next_slot = 3u32;
+        for i in 0..n {
+            if !needed[i] {
+                continue;
+            }
+            match ops[i] {
+                Op::X => slot_of[i] = 0,
+                Op::Y => slot_of[i] = 1,
+                Op::Z => slot_of[i] = 2,
+                Op::Const(v) => {
+                    slot_of[i] = next_slot;
+                    constants.push((next_slot, v));
+                    next_slot += 1;
+                }
+                _ => {}
+            }
+        }
+        let mut free: Vec<u32> = Vec::new();
+        let mut instrs = Vec::new();
+        let is_temp = |ops: &[Op], m: Node| matches!(ops[m.0 as usize], Op::Unary(..) | Op::Binary(..) | Op::Select(..));
+        for i in 0..n {
+            if !needed[i] || !is_temp(ops, Node(i as u32)) {
+                continue;
+            }
+            let out = free.pop().unwrap_or_else(|| {
+                next_slot += 1;
+                next_slot - 1
+            });
+            slot_of[i] = out;
+            let s = |m: Node| slot_of[m.0 as usize];
+            let (instr, operands): (Instr, Vec<Node>) = match ops[i] {
+                Op::Unary(op, a) => (Instr::Unary { op, out, a: s(a) }, vec![a]),
+                Op::Binary(op, a, b) => (Instr::Binary { op, out, a: s(a), b: s(b) }, vec![a, b]),
+                Op::Select(c, a, b) => (
+                    Instr::Select {
+                        out,
+                        c: s(c),
+                        a: s(a),
+                        b: s(b),
+                    },
+                    vec![c, a, b],
+                ),
+                _ => unreachable!(),
+            };
+            instrs.push(instr);
+            // Free operands whose last use is this instruction (after choosing `out`,
+            // so that no instruction writes a slot it reads).
+            let mut operands = operands;
+            operands.sort();
+            operands.dedup();
+            for m in operands {
+                if last_use[m.0 as usize] == i && is_temp(ops, m) {
+                    free.push(slot_of[m.0 as usize]);
+                }
+            }
+        }
+        let output_slot = slot_of[output.0 as usize];
+        Tape {
+            constants,
+            instrs,
+            slots: next_slot,
+            output: output_slot,
+        }
+    }
+
+    /// Constants and the slots they live in.
+    pub fn constants(&self) -> &[(u32, f64)] {
+        &self.constants
+    }
+    /// Instructions in evaluation order.
+    pub fn instrs(&self) -> &[Instr] {
+        &self.instrs
+    }
+    /// Total slots needed.
+    pub fn slots(&self) -> usize {
+        self.slots as usize
+    }
+    /// The slot holding the result.
+    pub fn output(&self) -> usize {
+        self.output as usize
+    }
+
+    /// Number of instructions.
+    pub fn len(&self) -> usize {
+        self.instrs.len()
+    }
+
+    /// True when the result is a constant or a coordinate.
+    pub fn is_empty(&self) -> bool {
+        self.instrs.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shares_and_folds() {
+        let mut b = Builder::new();
+        let x = b.x();
+        let two = b.constant(2.0);
+        let s1 = b.add(x, two);
+        let s2 = b.add(two, x);
+        assert_eq!(s1, s2);
+        let three = b.constant(3.0);
+        let five = b.add(two, three);
+        assert_eq!(b.const_value(five), Some(5.0));
+        let m = b.mul(s1, s1);
+        assert!(matches!(b.op(m), Op::Unary(UnOp::Square, _)));
+    }
+
+    #[test]
+    fn tape_reuses_slots_and_never_aliases() {
+        let mut b = Builder::new();
+        let (x, y, z) = (b.x(), b.y(), b.z());
+        let mut acc = b.square(x);
+        for v in [y, z, x, y, z] {
+            let s = b.square(v);
+            let t = b.add_c(s, 1.5);
+            acc = b.add(acc, t);
+            acc = b.sqrt(acc);
+        }
+        let t = b.tape(acc);
+        // Temporaries are reused: far fewer slots than instructions.
+        assert!(t.slots() < 3 + 1 + t.len() / 2, "{} slots for {} instructions", t.slots(), t.len());
+        for i in &t.instrs {
+            match *i {
+                Instr::Unary { out, a, .. } => assert_ne!(out, a),
+                Instr::Binary { out, a, b, .. } => assert!(out != a && out != b),
+                Instr::Select { out, c, a, b } => assert!(out != a && out != b && out != c),
+            }
+        }
+    }
+}

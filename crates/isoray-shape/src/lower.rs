@@ -1,0 +1,438 @@
+//! Type checking and lowering of parsed shape text into the scalar DAG.
+//!
+//! The language is typed (`float`, `vec2`, `vec3`); lowering checks every
+//! operation's types, reports mismatches at their span, and produces DAG
+//! nodes through a [`Builder`], so a shape is compiled exactly once.
+
+use std::collections::HashMap;
+
+use crate::diag::{suggest, Diagnostic, SourceId, Span};
+use crate::ir::{Builder, Node, UnOp};
+use crate::library;
+use crate::syntax::{parse, BinaryOp, Expr, ExprKind, Program, TypeName};
+use crate::types::{Type, Val, Value};
+
+/// A user primitive: a named SDF with parameters, called like a built-in
+/// with the point first and then the parameters in declaration order.
+#[derive(Debug, Clone)]
+pub struct Surface {
+    /// Its name.
+    pub name: String,
+    /// Parameters in call order, with their defaults (which fix their types).
+    pub params: Vec<(String, Value)>,
+    /// The parsed body.
+    pub program: Program,
+    /// Where the body's text came from.
+    pub source: SourceId,
+}
+
+/// Everything shape text may refer to besides `p`: the scene's named
+/// parameters and its user primitives.
+#[derive(Debug, Clone, Default)]
+pub struct Library {
+    params: Vec<(String, Value)>,
+    surfaces: HashMap<String, Surface>,
+    order: Vec<String>,
+}
+
+impl Library {
+    /// An empty library.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Defines (or redefines) a named parameter visible to all shape text.
+    pub fn set_param(&mut self, name: &str, value: Value) {
+        if let Some(slot) = self.params.iter_mut().find(|(n, _)| n == name) {
+            slot.1 = value;
+        } else {
+            self.params.push((name.to_string(), value));
+        }
+    }
+
+    /// The named parameters.
+    pub fn params(&self) -> &[(String, Value)] {
+        &self.params
+    }
+
+    /// Parses and adds a user primitive. `source` identifies `text` in
+    /// diagnostics. The body is type-checked by [`Library::check`].
+    pub fn add_surface(&mut self, name: &str, params: Vec<(String, Value)>, text: &str, source: SourceId) -> Result<(), Diagnostic> {
+        let program = parse(text, source)?;
+        if !self.surfaces.contains_key(name) {
+            self.order.push(name.to_string());
+        }
+        self.surfaces.insert(
+            name.to_string(),
+            Surface {
+                name: name.to_string(),
+                params,
+                program,
+                source,
+            },
+        );
+        Ok(())
+    }
+
+    /// A user primitive by name.
+    pub fn surface(&self, name: &str) -> Option<&Surface> {
+        self.surfaces.get(name)
+    }
+
+    /// Names of the user primitives in the order they were added.
+    pub fn surface_names(&self) -> &[String] {
+        &self.order
+    }
+
+    /// Type-checks every user primitive body (with its default parameters).
+    pub fn check(&self) -> Result<(), Diagnostic> {
+        let mut b = Builder::new();
+        for name in &self.order {
+            let s = &self.surfaces[name];
+            let mut l = Lowerer::new(&mut b, self, s.source);
+            let p = l.point();
+            let args: Vec<Val> = s.params.iter().map(|(_, v)| v.lower(l.b)).collect();
+            l.inline_surface(s, p, &args, Span::default())?;
+        }
+        Ok(())
+    }
+
+    /// Compiles shape text to a DAG node in `b` (the signed distance at `p`).
+    pub fn compile(&self, b: &mut Builder, text: &str, source: SourceId) -> Result<Node, Diagnostic> {
+        let program = parse(text, source)?;
+        self.compile_program(b, &program, source)
+    }
+
+    /// Compiles an already parsed program.
+    pub fn compile_program(&self, b: &mut Builder, program: &Program, source: SourceId) -> Result<Node, Diagnostic> {
+        let mut l = Lowerer::new(b, self, source);
+        let p = l.point();
+        l.scope.push(("p".to_string(), p));
+        let v = l.program(program)?;
+        if v.ty != Type::Float {
+            return Err(Diagnostic::new(source, program.body.span, format!("a shape must be a `float` distance, but this is a `{}`", v.ty))
+                .with_label(format!("this is a {}", v.ty))
+                .with_note("call a primitive such as `sphere(p, 1.0)`, or take a component such as `.x`"));
+        }
+        Ok(v.s())
+    }
+}
+
+/// Lowers one snippet; holds the scope and the call stack of user primitives.
+pub(crate) struct Lowerer<'a> {
+    pub(crate) b: &'a mut Builder,
+    lib: &'a Library,
+    pub(crate) source: SourceId,
+    scope: Vec<(String, Val)>,
+    calls: Vec<String>,
+}
+
+/// A lowered argument and where it was written.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Arg {
+    pub(crate) v: Val,
+    pub(crate) span: Span,
+}
+
+const MAX_INLINE_DEPTH: usize = 64;
+
+impl<'a> Lowerer<'a> {
+    fn new(b: &'a mut Builder, lib: &'a Library, source: SourceId) -> Self {
+        Lowerer {
+            b,
+            lib,
+            source,
+            scope: Vec::new(),
+            calls: Vec::new(),
+        }
+    }
+
+    fn point(&mut self) -> Val {
+        let (x, y, z) = (self.b.x(), self.b.y(), self.b.z());
+        Val::vec3(x, y, z)
+    }
+
+    pub(crate) fn err(&self, span: Span, msg: impl Into<String>) -> Diagnostic {
+        Diagnostic::new(self.source, span, msg)
+    }
+
+    fn program(&mut self, prog: &Program) -> Result<Val, Diagnostic> {
+        let depth = self.scope.len();
+        for l in &prog.lets {
+            let v = self.expr(&l.value)?;
+            if let Some((ty, span)) = l.ty {
+                let want = match ty {
+                    TypeName::Float => Type::Float,
+                    TypeName::Vec2 => Type::Vec2,
+                    TypeName::Vec3 => Type::Vec3,
+                };
+                if want != v.ty {
+                    return Err(self
+                        .err(l.value.span, format!("`{}` is declared `{}` but its value is a `{}`", l.name, want, v.ty))
+                        .with_label(format!("this is a {}", v.ty))
+                        .with_note(format!("the declaration is at byte {}", span.start)));
+                }
+            }
+            self.scope.push((l.name.clone(), v));
+        }
+        let r = self.expr(&prog.body);
+        self.scope.truncate(depth);
+        r
+    }
+
+    fn lookup(&self, name: &str) -> Option<Val> {
+        self.scope.iter().rev().find(|(n, _)| n == name).map(|(_, v)| *v)
+    }
+
+    pub(crate) fn expr(&mut self, e: &Expr) -> Result<Val, Diagnostic> {
+        match &e.kind {
+            ExprKind::Num(v) => Ok(Val::float(self.b.constant(*v))),
+            ExprKind::Var(name) => {
+                if let Some(v) = self.lookup(name) {
+                    return Ok(v);
+                }
+                if let Some((_, v)) = self.lib.params.iter().find(|(n, _)| n == name) {
+                    return Ok(v.lower(self.b));
+                }
+                if let Some(c) = library::constant(name) {
+                    return Ok(Val::float(self.b.constant(c)));
+                }
+                let mut known: Vec<&str> = self.scope.iter().map(|(n, _)| n.as_str()).collect();
+                known.extend(self.lib.params.iter().map(|(n, _)| n.as_str()));
+                let mut d = self.err(e.span, format!("unknown name `{name}`")).with_label("not a variable, parameter or binding in scope");
+                if let Some(s) = suggest(name, known) {
+                    d = d.with_note(format!("did you mean `{s}`?"));
+                } else if library::is_function(name) || self.lib.surfaces.contains_key(name) {
+                    d = d.with_note(format!("`{name}` is a function: call it with arguments, like `{name}(p, ...)`"));
+                }
+                Err(d)
+            }
+            ExprKind::Neg(a) => {
+                let v = self.expr(a)?;
+                Ok(self.map1(v, |b, x| b.neg(x)))
+            }
+            ExprKind::Binary(op, a, b) => {
+                let (va, vb) = (self.expr(a)?, self.expr(b)?);
+                if va.ty != vb.ty && va.ty != Type::Float && vb.ty != Type::Float {
+                    let verb = match op {
+                        BinaryOp::Add => "add",
+                        BinaryOp::Sub => "subtract",
+                        BinaryOp::Mul => "multiply",
+                        BinaryOp::Div => "divide",
+                    };
+                    return Err(self
+                        .err(e.span, format!("cannot {verb} `{}` and `{}`", va.ty, vb.ty))
+                        .with_label(format!("{} {} {}", va.ty, op.symbol(), vb.ty))
+                        .with_note("both sides must have the same type, or one side must be a float"));
+                }
+                let f = match op {
+                    BinaryOp::Add => Builder::add,
+                    BinaryOp::Sub => Builder::sub,
+                    BinaryOp::Mul => Builder::mul,
+                    BinaryOp::Div => Builder::div,
+                };
+                Ok(self.map2(va, vb, f))
+            }
+            ExprKind::Swizzle(a, comps) => {
+                let v = self.expr(a)?;
+                self.swizzle(v, comps, e.span)
+            }
+            ExprKind::Call { name, name_span, args } => {
+                let mut lowered = Vec::with_capacity(args.len());
+                for a in args {
+                    lowered.push(Arg { v: self.expr(a)?, span: a.span });
+                }
+                self.call(name, *name_span, e.span, &lowered)
+            }
+        }
+    }
+
+    fn swizzle(&mut self, v: Val, comps: &str, span: Span) -> Result<Val, Diagnostic> {
+        if v.ty == Type::Float {
+            return Err(self.err(span, format!("cannot take components `.{comps}` of a `float`")).with_label("a float has no components"));
+        }
+        if comps.is_empty() || comps.len() > 3 {
+            return Err(self.err(span, format!("a swizzle takes 1 to 3 components, found `.{comps}`")).with_label("expected e.g. `.x`, `.xz` or `.zyx`"));
+        }
+        let mut out = Vec::new();
+        for ch in comps.chars() {
+            let i = match ch {
+                'x' | 'r' | 's' => 0,
+                'y' | 'g' | 't' => 1,
+                'z' | 'b' | 'p' => 2,
+                _ => {
+                    return Err(self
+                        .err(span, format!("`{ch}` is not a component name in `.{comps}`"))
+                        .with_label("components are x, y, z (or r, g, b)"))
+                }
+            };
+            if i >= v.ty.width() {
+                return Err(self
+                    .err(span, format!("`.{ch}` is out of range for a `{}`", v.ty))
+                    .with_label(format!("a {} has only {} components", v.ty, v.ty.width())));
+            }
+            out.push(v.c[i]);
+        }
+        Ok(Val::from_slice(&out).expect("1..=3 components"))
+    }
+
+    /// Applies `f` to each component.
+    pub(crate) fn map1(&mut self, v: Val, f: impl Fn(&mut Builder, Node) -> Node) -> Val {
+        let mut c = v.c;
+        for i in 0..v.ty.width() {
+            c[i] = f(self.b, v.c[i]);
+        }
+        Val { ty: v.ty, c }
+    }
+
+    /// Applies `f` componentwise; a float operand broadcasts.
+    pub(crate) fn map2(&mut self, a: Val, b: Val, f: impl Fn(&mut Builder, Node, Node) -> Node) -> Val {
+        let ty = if a.ty == Type::Float { b.ty } else { a.ty };
+        let mut c = [a.c[0]; 3];
+        for (i, ci) in c.iter_mut().enumerate().take(ty.width()) {
+            *ci = f(self.b, a.at(i), b.at(i));
+        }
+        Val { ty, c }
+    }
+
+    /// Applies `f` componentwise over three operands with broadcasting.
+    pub(crate) fn map3(&mut self, a: Val, b: Val, c3: Val, f: impl Fn(&mut Builder, Node, Node, Node) -> Node) -> Val {
+        let ty = [a.ty, b.ty, c3.ty].into_iter().find(|t| *t != Type::Float).unwrap_or(Type::Float);
+        let mut c = [a.c[0]; 3];
+        for (i, ci) in c.iter_mut().enumerate().take(ty.width()) {
+            *ci = f(self.b, a.at(i), b.at(i), c3.at(i));
+        }
+        Val { ty, c }
+    }
+
+    fn call(&mut self, name: &str, name_span: Span, span: Span, args: &[Arg]) -> Result<Val, Diagnostic> {
+        if let Some(s) = self.lib.surfaces.get(name) {
+            return self.call_surface(s, name_span, span, args);
+        }
+        if let Some(r) = library::call(self, name, span, args) {
+            return r;
+        }
+        let mut names: Vec<&str> = library::function_names().collect();
+        names.extend(self.lib.surfaces.keys().map(|s| s.as_str()));
+        let mut d = self.err(name_span, format!("unknown function `{name}`")).with_label("not a built-in, primitive, operator or surface");
+        if let Some(s) = suggest(name, names) {
+            d = d.with_note(format!("did you mean `{s}`?"));
+        }
+        Err(d)
+    }
+
+    fn call_surface(&mut self, s: &Surface, name_span: Span, span: Span, args: &[Arg]) -> Result<Val, Diagnostic> {
+        let sig = std::iter::once("p: vec3".to_string())
+            .chain(s.params.iter().map(|(n, v)| format!("{n}: {} = {}", v.ty(), fmt_value(v))))
+            .collect::<Vec<_>>()
+            .join(", ");
+        if args.is_empty() || args.len() > s.params.len() + 1 {
+            return Err(self
+                .err(span, format!("`{}` takes the point and up to {} parameter(s), found {} argument(s)", s.name, s.params.len(), args.len()))
+                .with_label("wrong number of arguments")
+                .with_note(format!("signature: {}({sig})", s.name)));
+        }
+        if args[0].v.ty != Type::Vec3 {
+            return Err(self
+                .err(args[0].span, format!("the first argument of `{}` is the point: expected `vec3`, found `{}`", s.name, args[0].v.ty))
+                .with_label("expected vec3"));
+        }
+        let mut vals = Vec::new();
+        for (i, (pname, default)) in s.params.iter().enumerate() {
+            match args.get(i + 1) {
+                Some(a) => {
+                    let want = default.ty();
+                    let v = if a.v.ty == want {
+                        a.v
+                    } else if a.v.ty == Type::Float {
+                        Val::from_slice(&vec![a.v.s(); want.width()]).expect("width 1..=3")
+                    } else {
+                        return Err(self
+                            .err(a.span, format!("parameter `{pname}` of `{}` is a `{want}`, found `{}`", s.name, a.v.ty))
+                            .with_label(format!("expected {want}"))
+                            .with_note(format!("signature: {}({sig})", s.name)));
+                    };
+                    vals.push(v);
+                }
+                None => vals.push(default.lower(self.b)),
+            }
+        }
+        if self.calls.iter().any(|c| c == &s.name) {
+            let chain = self.calls.join(" → ");
+            return Err(self
+                .err(name_span, format!("surface `{}` calls itself ({chain} → {})", s.name, s.name))
+                .with_label("recursive call"));
+        }
+        if self.calls.len() >= MAX_INLINE_DEPTH {
+            return Err(self.err(name_span, "surfaces nested too deeply").with_label(format!("more than {MAX_INLINE_DEPTH} levels")));
+        }
+        self.inline_surface(s, args[0].v, &vals, name_span)
+    }
+
+    fn inline_surface(&mut self, s: &Surface, p: Val, params: &[Val], _span: Span) -> Result<Val, Diagnostic> {
+        let saved_scope = std::mem::take(&mut self.scope);
+        let saved_source = self.source;
+        self.source = s.source;
+        self.calls.push(s.name.clone());
+        self.scope.push(("p".to_string(), p));
+        for ((n, _), v) in s.params.iter().zip(params) {
+            self.scope.push((n.clone(), *v));
+        }
+        let r = self.program(&s.program);
+        self.calls.pop();
+        self.source = saved_source;
+        self.scope = saved_scope;
+        let v = r?;
+        if v.ty != Type::Float {
+            return Err(Diagnostic::new(s.source, s.program.body.span, format!("surface `{}` must give a `float` distance, found `{}`", s.name, v.ty))
+                .with_label(format!("this is a {}", v.ty)));
+        }
+        Ok(v)
+    }
+
+    /// Length of a value (|x| for a float).
+    pub(crate) fn length(&mut self, v: Val) -> Node {
+        if v.ty == Type::Float {
+            return self.b.abs(v.s());
+        }
+        let mut acc = self.b.square(v.c[0]);
+        for i in 1..v.ty.width() {
+            let s = self.b.square(v.c[i]);
+            acc = self.b.add(acc, s);
+        }
+        self.b.sqrt(acc)
+    }
+
+    /// Dot product of two values of the same type.
+    pub(crate) fn dot(&mut self, a: Val, c: Val) -> Node {
+        let w = a.ty.width().max(c.ty.width());
+        let mut acc = self.b.mul(a.at(0), c.at(0));
+        for i in 1..w {
+            let m = self.b.mul(a.at(i), c.at(i));
+            acc = self.b.add(acc, m);
+        }
+        acc
+    }
+
+    /// Largest component.
+    pub(crate) fn max_comp(&mut self, v: Val) -> Node {
+        let mut m = v.c[0];
+        for i in 1..v.ty.width() {
+            m = self.b.max(m, v.c[i]);
+        }
+        m
+    }
+
+    /// A unary op on every component.
+    pub(crate) fn un(&mut self, op: UnOp, v: Val) -> Val {
+        self.map1(v, |b, x| b.unary(op, x))
+    }
+}
+
+fn fmt_value(v: &Value) -> String {
+    match v {
+        Value::Float(x) => format!("{x}"),
+        Value::Vec2([x, y]) => format!("vec2({x}, {y})"),
+        Value::Vec3([x, y, z]) => format!("vec3({x}, {y}, {z})"),
+    }
+}

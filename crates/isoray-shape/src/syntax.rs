@@ -1,0 +1,543 @@
+//! Lexer, abstract syntax tree and parser of the shape language.
+//!
+//! The grammar, in order of precedence:
+//!
+//! ```text
+//! program  := stmt* [ 'return' ] expr [ ';' ]
+//! stmt     := 'let' IDENT [ ':' TYPE ] '=' expr ';'
+//!           | TYPE IDENT '=' expr ';'            // GLSL style: vec3 q = p - c;
+//! expr     := additive
+//! additive := term (('+' | '-') term)*
+//! term     := unary (('*' | '/') unary)*
+//! unary    := ('-' | '+') unary | postfix
+//! postfix  := primary ('.' SWIZZLE)*
+//! primary  := NUMBER | IDENT | IDENT '(' [expr (',' expr)*] ')' | '(' expr ')'
+//! ```
+//! Comments are `// ...` to the end of the line and `/* ... */`.
+
+use crate::diag::{Diagnostic, SourceId, Span};
+
+/// A token kind.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Tok {
+    /// A numeric literal.
+    Num(f64),
+    /// An identifier or keyword.
+    Ident(String),
+    /// One of `+ - * / ( ) , . ; = :`.
+    Punct(char),
+    /// End of input.
+    Eof,
+}
+
+/// A token with its span.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Token {
+    /// What it is.
+    pub tok: Tok,
+    /// Where it is.
+    pub span: Span,
+}
+
+/// Splits `text` into tokens.
+pub fn lex(text: &str, source: SourceId) -> Result<Vec<Token>, Diagnostic> {
+    let bytes = text.as_bytes();
+    let mut i = 0;
+    let mut out = Vec::new();
+    while i < bytes.len() {
+        let c = bytes[i];
+        if c.is_ascii_whitespace() {
+            i += 1;
+            continue;
+        }
+        if c == b'/' && bytes.get(i + 1) == Some(&b'/') {
+            while i < bytes.len() && bytes[i] != b'\n' {
+                i += 1;
+            }
+            continue;
+        }
+        if c == b'/' && bytes.get(i + 1) == Some(&b'*') {
+            let start = i;
+            i += 2;
+            loop {
+                if i + 1 >= bytes.len() {
+                    return Err(Diagnostic::new(source, Span::new(start, start + 2), "unterminated comment")
+                        .with_label("this `/*` is never closed with `*/`"));
+                }
+                if bytes[i] == b'*' && bytes[i + 1] == b'/' {
+                    i += 2;
+                    break;
+                }
+                i += 1;
+            }
+            continue;
+        }
+        let start = i;
+        if c.is_ascii_digit() || (c == b'.' && bytes.get(i + 1).is_some_and(|b| b.is_ascii_digit())) {
+            while i < bytes.len() && (bytes[i].is_ascii_digit() || bytes[i] == b'.') {
+                i += 1;
+            }
+            if i < bytes.len() && (bytes[i] == b'e' || bytes[i] == b'E') {
+                let save = i;
+                i += 1;
+                if i < bytes.len() && (bytes[i] == b'+' || bytes[i] == b'-') {
+                    i += 1;
+                }
+                if i < bytes.len() && bytes[i].is_ascii_digit() {
+                    while i < bytes.len() && bytes[i].is_ascii_digit() {
+                        i += 1;
+                    }
+                } else {
+                    i = save;
+                }
+            }
+            // GLSL float suffix.
+            let lit = &text[start..i];
+            if i < bytes.len() && (bytes[i] == b'f' || bytes[i] == b'F') {
+                i += 1;
+            }
+            let span = Span::new(start, i);
+            let v: f64 = lit.parse().map_err(|_| {
+                Diagnostic::new(source, span, format!("malformed number `{lit}`")).with_label("expected a number like 1, 0.5 or 2.5e-3")
+            })?;
+            out.push(Token { tok: Tok::Num(v), span });
+            continue;
+        }
+        if c.is_ascii_alphabetic() || c == b'_' {
+            while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {
+                i += 1;
+            }
+            out.push(Token {
+                tok: Tok::Ident(text[start..i].to_string()),
+                span: Span::new(start, i),
+            });
+            continue;
+        }
+        if b"+-*/(),.;=:".contains(&c) {
+            out.push(Token {
+                tok: Tok::Punct(c as char),
+                span: Span::new(i, i + 1),
+            });
+            i += 1;
+            continue;
+        }
+        let ch = text[i..].chars().next().unwrap_or('?');
+        return Err(Diagnostic::new(source, Span::new(i, i + ch.len_utf8()), format!("unexpected character `{ch}`"))
+            .with_label("not part of the shape language"));
+    }
+    out.push(Token {
+        tok: Tok::Eof,
+        span: Span::new(text.len(), text.len()),
+    });
+    Ok(out)
+}
+
+/// A binary arithmetic operator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BinaryOp {
+    /// `+`
+    Add,
+    /// `-`
+    Sub,
+    /// `*`
+    Mul,
+    /// `/`
+    Div,
+}
+
+impl BinaryOp {
+    /// The operator's symbol.
+    pub fn symbol(self) -> char {
+        match self {
+            BinaryOp::Add => '+',
+            BinaryOp::Sub => '-',
+            BinaryOp::Mul => '*',
+            BinaryOp::Div => '/',
+        }
+    }
+}
+
+/// An expression node.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ExprKind {
+    /// A literal.
+    Num(f64),
+    /// A variable: `p`, a parameter or a `let` binding.
+    Var(String),
+    /// A call of a built-in, primitive, operator or user surface.
+    Call {
+        /// The callee's name.
+        name: String,
+        /// Span of the name.
+        name_span: Span,
+        /// Arguments in order.
+        args: Vec<Expr>,
+    },
+    /// `a op b`.
+    Binary(BinaryOp, Box<Expr>, Box<Expr>),
+    /// `-a`.
+    Neg(Box<Expr>),
+    /// `a.xzy`.
+    Swizzle(Box<Expr>, String),
+}
+
+/// An expression with its span.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Expr {
+    /// What it is.
+    pub kind: ExprKind,
+    /// The text it covers.
+    pub span: Span,
+}
+
+/// A type annotation as written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TypeName {
+    /// `float`
+    Float,
+    /// `vec2`
+    Vec2,
+    /// `vec3`
+    Vec3,
+}
+
+impl TypeName {
+    fn from_ident(s: &str) -> Option<TypeName> {
+        match s {
+            "float" => Some(TypeName::Float),
+            "vec2" => Some(TypeName::Vec2),
+            "vec3" => Some(TypeName::Vec3),
+            _ => None,
+        }
+    }
+}
+
+/// `let name [: type] = value;`
+#[derive(Debug, Clone, PartialEq)]
+pub struct Let {
+    /// Bound name.
+    pub name: String,
+    /// Span of the name.
+    pub name_span: Span,
+    /// Optional declared type.
+    pub ty: Option<(TypeName, Span)>,
+    /// Bound expression.
+    pub value: Expr,
+}
+
+/// A parsed snippet: bindings then a result expression.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Program {
+    /// The `let` bindings, in order.
+    pub lets: Vec<Let>,
+    /// The result.
+    pub body: Expr,
+}
+
+/// Words that cannot be used as binding names.
+pub const KEYWORDS: &[&str] = &["let", "return", "float", "vec2", "vec3"];
+
+struct Parser<'a> {
+    toks: &'a [Token],
+    pos: usize,
+    source: SourceId,
+    depth: usize,
+}
+
+/// Maximum nesting depth, so that hostile input cannot overflow the stack.
+const MAX_DEPTH: usize = 200;
+
+/// Parses a snippet of shape text.
+pub fn parse(text: &str, source: SourceId) -> Result<Program, Diagnostic> {
+    let toks = lex(text, source)?;
+    let mut p = Parser {
+        toks: &toks,
+        pos: 0,
+        source,
+        depth: 0,
+    };
+    p.program()
+}
+
+fn describe(t: &Tok) -> String {
+    match t {
+        Tok::Num(v) => format!("number `{v}`"),
+        Tok::Ident(s) => format!("`{s}`"),
+        Tok::Punct(c) => format!("`{c}`"),
+        Tok::Eof => "end of input".to_string(),
+    }
+}
+
+impl Parser<'_> {
+    fn peek(&self) -> &Token {
+        &self.toks[self.pos.min(self.toks.len() - 1)]
+    }
+    fn peek_at(&self, k: usize) -> &Tok {
+        &self.toks[(self.pos + k).min(self.toks.len() - 1)].tok
+    }
+    fn bump(&mut self) -> Token {
+        let t = self.peek().clone();
+        if self.pos < self.toks.len() - 1 {
+            self.pos += 1;
+        }
+        t
+    }
+    fn err(&self, msg: impl Into<String>, label: impl Into<String>) -> Diagnostic {
+        Diagnostic::new(self.source, self.peek().span, msg).with_label(label)
+    }
+    fn expect_punct(&mut self, c: char, context: &str) -> Result<Span, Diagnostic> {
+        if self.peek().tok == Tok::Punct(c) {
+            Ok(self.bump().span)
+        } else {
+            let found = describe(&self.peek().tok);
+            Err(self.err(format!("expected `{c}` {context}, found {found}"), format!("expected `{c}`")))
+        }
+    }
+    fn is_punct(&self, c: char) -> bool {
+        self.peek().tok == Tok::Punct(c)
+    }
+
+    fn program(&mut self) -> Result<Program, Diagnostic> {
+        let mut lets = Vec::new();
+        loop {
+            let is_let = matches!(&self.peek().tok, Tok::Ident(s) if s == "let");
+            let is_decl = matches!(&self.peek().tok, Tok::Ident(s) if TypeName::from_ident(s).is_some())
+                && matches!(self.peek_at(1), Tok::Ident(_));
+            if !(is_let || is_decl) {
+                break;
+            }
+            let ty = if is_let {
+                self.bump();
+                None
+            } else {
+                let t = self.bump();
+                let Tok::Ident(s) = &t.tok else { unreachable!() };
+                TypeName::from_ident(s).map(|ty| (ty, t.span))
+            };
+            let name_tok = self.bump();
+            let Tok::Ident(name) = name_tok.tok else {
+                return Err(Diagnostic::new(self.source, name_tok.span, format!("expected a name after `let`, found {}", describe(&name_tok.tok)))
+                    .with_label("expected a name"));
+            };
+            if KEYWORDS.contains(&name.as_str()) || name == "p" {
+                return Err(Diagnostic::new(self.source, name_tok.span, format!("`{name}` is reserved and cannot be bound")).with_label("reserved name"));
+            }
+            let mut ty = ty;
+            if is_let && self.is_punct(':') {
+                self.bump();
+                let t = self.bump();
+                match &t.tok {
+                    Tok::Ident(s) if TypeName::from_ident(s).is_some() => ty = TypeName::from_ident(s).map(|x| (x, t.span)),
+                    other => {
+                        return Err(Diagnostic::new(self.source, t.span, format!("expected a type (`float`, `vec2` or `vec3`), found {}", describe(other)))
+                            .with_label("expected a type"))
+                    }
+                }
+            }
+            self.expect_punct('=', &format!("after the name `{name}`"))?;
+            let value = self.expr()?;
+            self.expect_punct(';', "after the bound expression")?;
+            lets.push(Let {
+                name,
+                name_span: name_tok.span,
+                ty,
+                value,
+            });
+        }
+        if matches!(&self.peek().tok, Tok::Ident(s) if s == "return") {
+            self.bump();
+        }
+        if self.peek().tok == Tok::Eof {
+            return Err(self.err("expected an expression, found end of input", "the shape needs a final expression giving the distance"));
+        }
+        let body = self.expr()?;
+        if self.is_punct(';') {
+            self.bump();
+        }
+        if self.peek().tok != Tok::Eof {
+            let found = describe(&self.peek().tok);
+            return Err(self.err(format!("expected end of input after the expression, found {found}"), "unexpected text"));
+        }
+        Ok(Program { lets, body })
+    }
+
+    fn expr(&mut self) -> Result<Expr, Diagnostic> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(self.err("expression nested too deeply", format!("more than {MAX_DEPTH} levels")));
+        }
+        let r = self.additive();
+        self.depth -= 1;
+        r
+    }
+
+    fn additive(&mut self) -> Result<Expr, Diagnostic> {
+        let mut lhs = self.term()?;
+        loop {
+            let op = match self.peek().tok {
+                Tok::Punct('+') => BinaryOp::Add,
+                Tok::Punct('-') => BinaryOp::Sub,
+                _ => return Ok(lhs),
+            };
+            self.bump();
+            let rhs = self.term()?;
+            let span = lhs.span.to(rhs.span);
+            lhs = Expr {
+                kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)),
+                span,
+            };
+        }
+    }
+
+    fn term(&mut self) -> Result<Expr, Diagnostic> {
+        let mut lhs = self.unary()?;
+        loop {
+            let op = match self.peek().tok {
+                Tok::Punct('*') => BinaryOp::Mul,
+                Tok::Punct('/') => BinaryOp::Div,
+                _ => return Ok(lhs),
+            };
+            self.bump();
+            let rhs = self.unary()?;
+            let span = lhs.span.to(rhs.span);
+            lhs = Expr {
+                kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)),
+                span,
+            };
+        }
+    }
+
+    fn unary(&mut self) -> Result<Expr, Diagnostic> {
+        if self.is_punct('-') || self.is_punct('+') {
+            let t = self.bump();
+            self.depth += 1;
+            if self.depth > MAX_DEPTH {
+                return Err(self.err("expression nested too deeply", format!("more than {MAX_DEPTH} levels")));
+            }
+            let inner = self.unary()?;
+            self.depth -= 1;
+            let span = t.span.to(inner.span);
+            if t.tok == Tok::Punct('+') {
+                return Ok(Expr { kind: inner.kind, span });
+            }
+            return Ok(Expr {
+                kind: ExprKind::Neg(Box::new(inner)),
+                span,
+            });
+        }
+        self.postfix()
+    }
+
+    fn postfix(&mut self) -> Result<Expr, Diagnostic> {
+        let mut e = self.primary()?;
+        while self.is_punct('.') {
+            self.bump();
+            let t = self.bump();
+            match t.tok {
+                Tok::Ident(s) => {
+                    let span = e.span.to(t.span);
+                    e = Expr {
+                        kind: ExprKind::Swizzle(Box::new(e), s),
+                        span,
+                    };
+                }
+                other => {
+                    return Err(Diagnostic::new(self.source, t.span, format!("expected a swizzle such as `.xz` after `.`, found {}", describe(&other)))
+                        .with_label("expected components"))
+                }
+            }
+        }
+        Ok(e)
+    }
+
+    fn primary(&mut self) -> Result<Expr, Diagnostic> {
+        let t = self.bump();
+        match t.tok {
+            Tok::Num(v) => Ok(Expr { kind: ExprKind::Num(v), span: t.span }),
+            Tok::Ident(name) => {
+                if self.is_punct('(') {
+                    self.bump();
+                    let mut args = Vec::new();
+                    if !self.is_punct(')') {
+                        loop {
+                            args.push(self.expr()?);
+                            if self.is_punct(',') {
+                                self.bump();
+                                continue;
+                            }
+                            break;
+                        }
+                    }
+                    let close = self.expect_punct(')', &format!("to close the arguments of `{name}`"))?;
+                    Ok(Expr {
+                        kind: ExprKind::Call {
+                            name,
+                            name_span: t.span,
+                            args,
+                        },
+                        span: t.span.to(close),
+                    })
+                } else {
+                    Ok(Expr { kind: ExprKind::Var(name), span: t.span })
+                }
+            }
+            Tok::Punct('(') => {
+                let inner = self.expr()?;
+                let close = self.expect_punct(')', "to close the parenthesis")?;
+                Ok(Expr {
+                    kind: inner.kind,
+                    span: t.span.to(close),
+                })
+            }
+            other => Err(Diagnostic::new(self.source, t.span, format!("expected an expression, found {}", describe(&other)))
+                .with_label("expected a number, a name, a call or `(`")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_precedence() {
+        let p = parse("1 + 2 * 3", 0).unwrap();
+        match p.body.kind {
+            ExprKind::Binary(BinaryOp::Add, _, r) => assert!(matches!(r.kind, ExprKind::Binary(BinaryOp::Mul, _, _))),
+            k => panic!("{k:?}"),
+        }
+    }
+
+    #[test]
+    fn parses_lets_and_swizzles() {
+        let p = parse("let q = p.xz; // comment\n vec2 r = q * 2.0; /* block */ length(r) - 1.0", 0).unwrap();
+        assert_eq!(p.lets.len(), 2);
+        assert_eq!(p.lets[1].ty.map(|t| t.0), Some(TypeName::Vec2));
+    }
+
+    #[test]
+    fn numbers() {
+        let toks = lex("1 .5 2.5e-3 1e2 3.0f", 0).unwrap();
+        let v: Vec<f64> = toks.iter().filter_map(|t| if let Tok::Num(v) = t.tok { Some(v) } else { None }).collect();
+        assert_eq!(v, vec![1.0, 0.5, 2.5e-3, 100.0, 3.0]);
+    }
+
+    #[test]
+    fn errors_are_located() {
+        let e = parse("sphere(p, 1.0", 0).unwrap_err();
+        assert_eq!(e.span.start, 13);
+        assert!(e.message.contains("expected `)`"), "{}", e.message);
+        let e = parse("1 + $", 0).unwrap_err();
+        assert_eq!(e.span, Span::new(4, 5));
+        let e = parse("", 0).unwrap_err();
+        assert!(e.message.contains("expected an expression"));
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_crash() {
+        let s = "(".repeat(10_000) + "1" + &")".repeat(10_000);
+        assert!(parse(&s, 0).is_err());
+        let s = "-".repeat(10_000) + "1";
+        assert!(parse(&s, 0).is_err());
+    }
+}
