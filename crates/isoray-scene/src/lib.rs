@@ -1,1 +1,28 @@
-//! placeholder
+//! # isoray-scene
+//!
+//! Scene documents for isoray: a TOML file with a camera, render settings,
+//! lights, materials, named parameters, user surfaces and objects, loaded into
+//! a checked [`Scene`] whose shapes are compiled once.
+//!
+//! ```
+//! let scene = isoray_scene::load_str(r#"
+//! [camera]
+//! position = [0.0, 0.0, 4.0]
+//! [[object]]
+//! shape = "sphere(p, 1.0)"
+//! "#, "inline.toml", &["render.width=64".to_string()]).unwrap();
+//! assert_eq!(scene.render.width, 64);
+//! assert!((scene.distance([2.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
+//! ```
+//!
+//! Errors name the file, line and column (or the `--set` override) and say
+//! what was expected; see [`SceneError`].
+
+pub mod doc;
+mod error;
+mod load;
+mod model;
+
+pub use error::{SceneError, Sources};
+pub use load::{load, load_str, RENDER_KEYS};
+pub use model::*;

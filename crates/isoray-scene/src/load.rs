@@ -1,0 +1,666 @@
+//! Loading a scene: TOML → located tree → `--set` overrides → typed, checked
+//! model → compiled shapes. Every error names the file, line and column (or
+//! the override) and what was expected.
+
+use std::path::Path;
+
+use isoray_shape::diag::suggest;
+use isoray_shape::{Builder, Diagnostic, Library, Shape, Span, Value};
+use toml::de::{DeTable, DeValue};
+
+use crate::doc::{convert, from_toml, Entry, Item, Located, Origin};
+use crate::error::{SceneError, Sources};
+use crate::model::*;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// Reads and loads a scene file, applying `--set KEY=VALUE` overrides.
+pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError::io(&name, "read", &e))?;
+    load_str(&text, &name, overrides)
+}
+
+/// Loads a scene from text; `name` is used in error messages.
+pub fn load_str(text: &str, name: &str, overrides: &[String]) -> Result<Scene> {
+    let src = Sources {
+        path: name.to_string(),
+        text: text.to_string(),
+        overrides: overrides.to_vec(),
+    };
+    let table = DeTable::parse(text).map_err(|e| {
+        let span = e.span().map(|r| Span::new(r.start, r.end)).unwrap_or_default();
+        let msg = e.message().trim().to_string();
+        src.error_at(span, &format!("invalid TOML: {msg}"), None, &[])
+    })?;
+    let mut root = from_toml(table.get_ref(), text);
+    for (i, ov) in overrides.iter().enumerate() {
+        apply_override(&src, &mut root, i, ov)?;
+    }
+    build(&src, &root)
+}
+
+const TOP_KEYS: &[&str] = &["camera", "render", "light", "material", "surface", "object", "params"];
+
+fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str) -> Result<()> {
+    let origin = Origin::Override(index);
+    let Some((key, value)) = text.split_once('=') else {
+        return Err(src.error(origin, format!("override `{text}` must have the form KEY=VALUE"), Some("expected KEY=VALUE"), &["for example: --set render.shadows=hard".into()]));
+    };
+    let key = key.trim();
+    let value_text = value.trim();
+    let value = match DeValue::parse(value_text) {
+        Ok(v) => convert(v.get_ref(), Span::default(), value_text, origin),
+        Err(_) => Located {
+            item: Item::Str(value_text.to_string(), (0..=value_text.len()).collect()),
+            origin,
+        },
+    };
+    let path: Vec<&str> = key.split('.').collect();
+    if path.iter().any(|s| s.is_empty()) {
+        return Err(src.error(origin, format!("malformed key `{key}` in override"), Some("expected a dotted key such as render.aa or light.0.intensity"), &[]));
+    }
+    let mut table: &mut Vec<Entry> = root;
+    let mut i = 0;
+    loop {
+        let seg = path[i];
+        let last = i + 1 == path.len();
+        let pos = table.iter().position(|e| e.key == seg);
+        if last {
+            match pos {
+                Some(p) => table[p].value = value,
+                None => table.push(Entry {
+                    key: seg.to_string(),
+                    key_origin: origin,
+                    value,
+                }),
+            }
+            return Ok(());
+        }
+        let p = match pos {
+            Some(p) => p,
+            None => {
+                table.push(Entry {
+                    key: seg.to_string(),
+                    key_origin: origin,
+                    value: Located {
+                        item: Item::Table(Vec::new()),
+                        origin: Origin::Implicit,
+                    },
+                });
+                table.len() - 1
+            }
+        };
+        let next = &mut table[p].value;
+        match &mut next.item {
+            Item::Table(t) => {
+                table = t;
+                i += 1;
+            }
+            Item::Array(items) => {
+                let Some(idx_seg) = path.get(i + 1) else { unreachable!() };
+                let n = items.len();
+                let Ok(idx) = idx_seg.parse::<usize>() else {
+                    return Err(src.error(origin, format!("`{seg}` is an array: expected an index after `{seg}.`, found `{idx_seg}`"), Some("expected an index"), &[format!("for example: --set {seg}.0.…")]));
+                };
+                let Some(elem) = items.get_mut(idx) else {
+                    return Err(src.error(origin, format!("`{seg}` has {n} element(s); index {idx} is out of range"), Some("no such element"), &[]));
+                };
+                if i + 2 == path.len() {
+                    *elem = value;
+                    return Ok(());
+                }
+                match &mut elem.item {
+                    Item::Table(t) => {
+                        table = t;
+                        i += 2;
+                    }
+                    other => return Err(src.error(origin, format!("`{seg}.{idx}` is {}, not a table", other.type_name()), None, &[])),
+                }
+            }
+            other => {
+                let tn = other.type_name();
+                return Err(src.error(origin, format!("`{}` is {tn}, so it has no key `{}`", path[..=i].join("."), path[i + 1]), Some("cannot set a key inside a value"), &[]));
+            }
+        }
+    }
+}
+
+/// Reads the keys of one table, remembering which were used.
+struct Reader<'a> {
+    src: &'a Sources,
+    entries: &'a [Entry],
+    ctx: String,
+    origin: Origin,
+    used: Vec<bool>,
+}
+
+impl<'a> Reader<'a> {
+    fn new(src: &'a Sources, v: &'a Located, ctx: &str) -> Result<Reader<'a>> {
+        match &v.item {
+            Item::Table(entries) => Ok(Reader {
+                src,
+                entries,
+                ctx: ctx.to_string(),
+                origin: v.origin,
+                used: vec![false; entries.len()],
+            }),
+            other => Err(src.error(v.origin, format!("`{ctx}` must be a table, found {}", other.type_name()), Some("expected a table"), &[])),
+        }
+    }
+
+    fn get(&mut self, key: &str) -> Option<&'a Located> {
+        let i = self.entries.iter().rposition(|e| e.key == key)?;
+        self.used[i] = true;
+        Some(&self.entries[i].value)
+    }
+
+    fn err(&self, v: &Located, key: &str, expected: &str) -> SceneError {
+        self.src.error(
+            v.origin,
+            format!("`{}.{key}`: expected {expected}, found {}", self.ctx, describe(&v.item)),
+            Some(&format!("expected {expected}")),
+            &[],
+        )
+    }
+
+    fn num_in(&mut self, key: &str, default: f64, ok: impl Fn(f64) -> bool, expected: &str) -> Result<f64> {
+        let Some(v) = self.get(key) else { return Ok(default) };
+        match v.item {
+            Item::Num(x, _) if ok(x) => Ok(x),
+            _ => Err(self.err(v, key, expected)),
+        }
+    }
+
+    fn positive(&mut self, key: &str, default: f64) -> Result<f64> {
+        self.num_in(key, default, |x| x.is_finite() && x > 0.0, "a positive number")
+    }
+
+    fn non_negative(&mut self, key: &str, default: f64) -> Result<f64> {
+        self.num_in(key, default, |x| x.is_finite() && x >= 0.0, "a number ≥ 0")
+    }
+
+    fn int(&mut self, key: &str, default: u32, lo: u32, hi: u32) -> Result<u32> {
+        let Some(v) = self.get(key) else { return Ok(default) };
+        match v.item {
+            Item::Num(x, _) if x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => Ok(x as u32),
+            _ => Err(self.err(v, key, &format!("an integer from {lo} to {hi}"))),
+        }
+    }
+
+    fn boolean(&mut self, key: &str, default: bool) -> Result<bool> {
+        let Some(v) = self.get(key) else { return Ok(default) };
+        match v.item {
+            Item::Bool(b) => Ok(b),
+            _ => Err(self.err(v, key, "`true` or `false`")),
+        }
+    }
+
+    fn vec3_opt(&mut self, key: &str) -> Result<Option<Vec3>> {
+        let Some(v) = self.get(key) else { return Ok(None) };
+        if let Item::Array(items) = &v.item {
+            if items.len() == 3 {
+                let mut out = [0.0; 3];
+                for (o, it) in out.iter_mut().zip(items) {
+                    match it.item {
+                        Item::Num(x, _) if x.is_finite() => *o = x,
+                        _ => return Err(self.err(it, key, "a number in the 3-component array")),
+                    }
+                }
+                return Ok(Some(out));
+            }
+        }
+        Err(self.err(v, key, "an array of 3 numbers, like [1.0, 0.5, 0.0]"))
+    }
+
+    fn vec3(&mut self, key: &str, default: Vec3) -> Result<Vec3> {
+        Ok(self.vec3_opt(key)?.unwrap_or(default))
+    }
+
+    fn color(&mut self, key: &str, default: Vec3) -> Result<Vec3> {
+        let c = self.vec3(key, default)?;
+        if c.iter().any(|x| *x < 0.0) {
+            let v = self.get(key).expect("just read");
+            return Err(self.err(v, key, "a colour with components ≥ 0"));
+        }
+        Ok(c)
+    }
+
+    fn string(&mut self, key: &str) -> Result<Option<(&'a str, &'a Located)>> {
+        let Some(v) = self.get(key) else { return Ok(None) };
+        match &v.item {
+            Item::Str(s, _) => Ok(Some((s.as_str(), v))),
+            _ => Err(self.err(v, key, "a string")),
+        }
+    }
+
+    fn choice<T: Copy>(&mut self, key: &str, options: &[(&str, T)], default: T) -> Result<T> {
+        let Some((s, v)) = self.string(key)? else { return Ok(default) };
+        if let Some((_, t)) = options.iter().find(|(n, _)| *n == s) {
+            return Ok(*t);
+        }
+        let names: Vec<String> = options.iter().map(|(n, _)| format!("\"{n}\"")).collect();
+        let mut notes = Vec::new();
+        if let Some(sg) = suggest(s, options.iter().map(|(n, _)| *n)) {
+            notes.push(format!("did you mean \"{sg}\"?"));
+        }
+        Err(self.src.error(
+            v.origin,
+            format!("`{}.{key}`: expected one of {}, found \"{s}\"", self.ctx, names.join(", ")),
+            Some("unknown choice"),
+            &notes,
+        ))
+    }
+
+    /// Errors on keys that were never read.
+    fn finish(self, known: &[&str]) -> Result<()> {
+        for (e, used) in self.entries.iter().zip(&self.used) {
+            if !used {
+                let mut notes = vec![format!("known keys: {}", known.join(", "))];
+                if let Some(s) = suggest(&e.key, known.iter().copied()) {
+                    notes.insert(0, format!("did you mean `{s}`?"));
+                }
+                return Err(self.src.error(e.key_origin, format!("unknown key `{}` in `{}`", e.key, self.ctx), Some("unknown key"), &notes));
+            }
+        }
+        let _ = self.origin;
+        Ok(())
+    }
+}
+
+fn describe(item: &Item) -> String {
+    match item {
+        Item::Str(s, _) => format!("the string \"{}\"", truncate(s)),
+        Item::Num(x, _) => format!("{x}"),
+        Item::Bool(b) => format!("`{b}`"),
+        other => other.type_name().to_string(),
+    }
+}
+
+fn truncate(s: &str) -> String {
+    if s.chars().count() > 40 {
+        format!("{}…", s.chars().take(40).collect::<String>())
+    } else {
+        s.to_string()
+    }
+}
+
+fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
+    let root_item = Located {
+        item: Item::Table(root.to_vec()),
+        origin: Origin::Implicit,
+    };
+    let mut top = Reader::new(src, &root_item, "scene")?;
+
+    // [camera]
+    let camera = match top.get("camera") {
+        Some(v) => {
+            let mut r = Reader::new(src, v, "camera")?;
+            let position = r.vec3("position", [0.0, 0.0, 5.0])?;
+            let target = r.vec3("target", [0.0, 0.0, 0.0])?;
+            let up = r.vec3("up", [0.0, 1.0, 0.0])?;
+            let fov = r.num_in("fov", 40.0, |x| x > 0.0 && x < 180.0, "a vertical field of view in degrees, between 0 and 180")?;
+            let check_origin = r.get("target").or(r.get("position")).map(|l| l.origin).unwrap_or(v.origin);
+            r.finish(&["position", "target", "up", "fov"])?;
+            let fwd = sub(target, position);
+            if norm(fwd) < 1e-12 {
+                return Err(src.error(check_origin, "camera `target` equals `position`: the camera has no direction", Some("move the target away from the position"), &[]));
+            }
+            if norm(cross(fwd, up)) < 1e-9 * norm(fwd) * norm(up).max(1e-300) {
+                return Err(src.error(check_origin, "camera `up` is parallel to the viewing direction (or zero)", Some("choose an `up` that is not along target − position"), &[]));
+            }
+            Camera { position, target, up, fov }
+        }
+        None => Camera {
+            position: [0.0, 0.0, 5.0],
+            target: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov: 40.0,
+        },
+    };
+
+    // [render]
+    let d = RenderSettings::default();
+    let render = match top.get("render") {
+        Some(v) => {
+            let mut r = Reader::new(src, v, "render")?;
+            let s = RenderSettings {
+                width: r.int("width", d.width, 1, 16384)?,
+                height: r.int("height", d.height, 1, 16384)?,
+                aa: r.int("aa", d.aa, 1, 16)?,
+                max_steps: r.int("max_steps", d.max_steps, 1, 100_000)?,
+                hit_epsilon: r.positive("hit_epsilon", d.hit_epsilon)?,
+                relative_epsilon: r.boolean("relative_epsilon", d.relative_epsilon)?,
+                max_distance: r.positive("max_distance", d.max_distance)?,
+                step_scale: r.num_in("step_scale", d.step_scale, |x| x > 0.0 && x <= 2.0, "a step scale in (0, 2]")?,
+                normals: r.choice(
+                    "normals",
+                    &[
+                        ("central", NormalMethod::Central),
+                        ("forward", NormalMethod::Forward),
+                        ("tetrahedron", NormalMethod::Tetrahedron),
+                        ("analytic", NormalMethod::Analytic),
+                    ],
+                    d.normals,
+                )?,
+                normal_epsilon: r.positive("normal_epsilon", d.normal_epsilon)?,
+                shadows: r.choice(
+                    "shadows",
+                    &[
+                        ("none", ShadowMode::None),
+                        ("hard", ShadowMode::Hard),
+                        ("soft", ShadowMode::Soft),
+                        ("improved", ShadowMode::Improved),
+                    ],
+                    d.shadows,
+                )?,
+                shadow_exponent: r.positive("shadow_exponent", d.shadow_exponent)?,
+                shadow_start: r.non_negative("shadow_start", d.shadow_start)?,
+                shadow_max_distance: r.positive("shadow_max_distance", d.shadow_max_distance)?,
+                shadow_max_steps: r.int("shadow_max_steps", d.shadow_max_steps, 1, 100_000)?,
+                ao: r.boolean("ao", d.ao)?,
+                ao_samples: r.int("ao_samples", d.ao_samples, 1, 64)?,
+                ao_step: r.positive("ao_step", d.ao_step)?,
+                ao_intensity: r.non_negative("ao_intensity", d.ao_intensity)?,
+                background: r.color("background", d.background)?,
+                blend: r.non_negative("blend", d.blend)?,
+                view: r.choice("view", &[("shaded", View::Shaded), ("steps", View::Steps), ("normals", View::Normals)], d.view)?,
+            };
+            r.finish(RENDER_KEYS)?;
+            s
+        }
+        None => d,
+    };
+
+    // [[light]]
+    let mut lights = Vec::new();
+    if let Some(v) = top.get("light") {
+        let items: Vec<&Located> = match &v.item {
+            Item::Array(items) => items.iter().collect(),
+            Item::Table(_) => vec![v],
+            other => return Err(src.error(v.origin, format!("`light` must be an array of tables ([[light]]), found {}", other.type_name()), None, &[])),
+        };
+        for (i, lv) in items.into_iter().enumerate() {
+            let mut r = Reader::new(src, lv, &format!("light.{i}"))?;
+            let kind_name = r.choice("kind", &[("directional", 0), ("point", 1)], 0)?;
+            let kind = if kind_name == 0 {
+                let dir = r.vec3("direction", [-1.0, 2.0, 1.0])?;
+                if norm(dir) < 1e-12 {
+                    let o = r.get("direction").map(|l| l.origin).unwrap_or(lv.origin);
+                    return Err(src.error(o, format!("`light.{i}.direction` must not be zero"), Some("expected a direction towards the light"), &[]));
+                }
+                LightKind::Directional { direction: normalize(dir) }
+            } else {
+                let Some(position) = r.vec3_opt("position")? else {
+                    return Err(src.error(lv.origin, format!("point light `light.{i}` needs a `position`"), Some("add position = [x, y, z]"), &[]));
+                };
+                LightKind::Point { position }
+            };
+            let light = Light {
+                kind,
+                color: r.color("color", [1.0; 3])?,
+                intensity: r.non_negative("intensity", 1.0)?,
+                size: r.positive("size", 0.1)?,
+                attenuation: r.color("attenuation", [1.0, 0.0, 0.0])?,
+            };
+            r.finish(&["kind", "direction", "position", "color", "intensity", "size", "attenuation"])?;
+            lights.push(light);
+        }
+    }
+
+    // [material.NAME]
+    let mut materials = vec![Material::default_named("default")];
+    if let Some(v) = top.get("material") {
+        let Item::Table(entries) = &v.item else {
+            return Err(src.error(v.origin, "`material` must be a table of named materials ([material.NAME])", None, &[]));
+        };
+        for e in entries {
+            let mut r = Reader::new(src, &e.value, &format!("material.{}", e.key))?;
+            let d = Material::default_named(&e.key);
+            let m = Material {
+                name: e.key.clone(),
+                ambient: r.color("ambient", d.ambient)?,
+                diffuse: r.color("diffuse", d.diffuse)?,
+                specular: r.color("specular", d.specular)?,
+                shininess: r.positive("shininess", d.shininess)?,
+                emission: r.color("emission", d.emission)?,
+                model: r.choice("model", &[("phong", ShadingModel::Phong), ("blinn-phong", ShadingModel::BlinnPhong)], d.model)?,
+                specular_function: r.choice("specular_function", &[("pow", SpecularFunction::Pow), ("schlick", SpecularFunction::Schlick)], d.specular_function)?,
+            };
+            r.finish(&["ambient", "diffuse", "specular", "shininess", "emission", "model", "specular_function"])?;
+            if let Some(slot) = materials.iter_mut().find(|x| x.name == m.name) {
+                *slot = m;
+            } else {
+                materials.push(m);
+            }
+        }
+    }
+
+    // Shape text snippets: source id → (text, byte map into the file or override).
+    let mut snippets: Vec<(&Located, &[usize])> = Vec::new();
+    let shape_error = |snips: &[(&Located, &[usize])], d: Diagnostic| -> SceneError {
+        let Some((loc, map)) = snips.get(d.source) else {
+            return src.error(Origin::Implicit, d.message.clone(), None, &d.notes);
+        };
+        let at = |i: usize| map.get(i).copied().unwrap_or_else(|| map.last().copied().unwrap_or(0));
+        match loc.origin {
+            Origin::File(_) => {
+                let span = Span::new(at(d.span.start), at(d.span.end.max(d.span.start)));
+                src.error_at(span, &d.message, d.label.as_deref(), &d.notes)
+            }
+            o => {
+                let mut notes = d.notes.clone();
+                notes.insert(0, format!("at byte {} of the value", d.span.start));
+                src.error(o, d.message.clone(), d.label.as_deref(), &notes)
+            }
+        }
+    };
+
+    // [params]
+    let mut lib = Library::new();
+    let mut params = Vec::new();
+    if let Some(v) = top.get("params") {
+        let Item::Table(entries) = &v.item else {
+            return Err(src.error(v.origin, "`params` must be a table of named numbers or vectors", None, &[]));
+        };
+        for e in entries {
+            let val = param_value(src, &e.value, &format!("params.{}", e.key))?;
+            check_name(src, &e.key, e.key_origin)?;
+            lib.set_param(&e.key, val);
+            params.push((e.key.clone(), val));
+        }
+    }
+
+    // [surface.NAME]
+    if let Some(v) = top.get("surface") {
+        let Item::Table(entries) = &v.item else {
+            return Err(src.error(v.origin, "`surface` must be a table of named surfaces ([surface.NAME])", None, &[]));
+        };
+        for e in entries {
+            let ctx = format!("surface.{}", e.key);
+            check_name(src, &e.key, e.key_origin)?;
+            if isoray_shape::library::is_function(&e.key) {
+                return Err(src.error(e.key_origin, format!("surface name `{}` is already a built-in function", e.key), Some("choose another name"), &[]));
+            }
+            let mut r = Reader::new(src, &e.value, &ctx)?;
+            let mut sparams = Vec::new();
+            if let Some(pv) = r.get("params") {
+                let Item::Table(pe) = &pv.item else {
+                    return Err(src.error(pv.origin, format!("`{ctx}.params` must be a table such as {{ R = 1.0, r = 0.25 }}"), None, &[]));
+                };
+                for p in pe {
+                    check_name(src, &p.key, p.key_origin)?;
+                    sparams.push((p.key.clone(), param_value(src, &p.value, &format!("{ctx}.params.{}", p.key))?));
+                }
+            }
+            for other in ["implicit", "parametric"] {
+                if let Some(ov) = r.get(other) {
+                    return Err(src.error(ov.origin, format!("`{ctx}.{other}`: only `sdf` surfaces are supported by this version of isoray"), Some("not supported yet"), &[]));
+                }
+            }
+            let Some((text, loc)) = r.string("sdf")? else {
+                return Err(src.error(e.value.origin, format!("`{ctx}` needs an `sdf` expression"), Some("add sdf = \"...\""), &[]));
+            };
+            r.finish(&["params", "sdf"])?;
+            let Item::Str(_, map) = &loc.item else { unreachable!() };
+            let id = snippets.len();
+            snippets.push((loc, map));
+            lib.add_surface(&e.key, sparams, text, id).map_err(|d| shape_error(&snippets, d))?;
+        }
+    }
+    lib.check().map_err(|d| shape_error(&snippets, d))?;
+
+    // [[object]]
+    let mut builder = Builder::new();
+    let mut objects = Vec::new();
+    let mut nodes = Vec::new();
+    match top.get("object") {
+        None => {}
+        Some(v) => {
+            let items: Vec<&Located> = match &v.item {
+                Item::Array(items) => items.iter().collect(),
+                other => return Err(src.error(v.origin, format!("`object` must be an array of tables ([[object]]), found {}", other.type_name()), None, &[])),
+            };
+            for (i, ov) in items.into_iter().enumerate() {
+                let mut r = Reader::new(src, ov, &format!("object.{i}"))?;
+                let name = r.string("name")?.map(|(s, _)| s.to_string());
+                let material = match r.string("material")? {
+                    None => 0,
+                    Some((m, loc)) => match materials.iter().position(|x| x.name == m) {
+                        Some(k) => k,
+                        None => {
+                            let names: Vec<&str> = materials.iter().map(|x| x.name.as_str()).collect();
+                            let mut notes = vec![format!("defined materials: {}", names.join(", "))];
+                            if let Some(s) = suggest(m, names.iter().copied()) {
+                                notes.insert(0, format!("did you mean \"{s}\"?"));
+                            }
+                            return Err(src.error(loc.origin, format!("`object.{i}.material`: no material named \"{m}\""), Some("unknown material"), &notes));
+                        }
+                    },
+                };
+                let Some((text, loc)) = r.string("shape")? else {
+                    return Err(src.error(ov.origin, format!("`object.{i}` needs a `shape`"), Some("add shape = \"sphere(p, 1.0)\""), &[]));
+                };
+                r.finish(&["name", "material", "shape"])?;
+                let Item::Str(_, map) = &loc.item else { unreachable!() };
+                let id = snippets.len();
+                snippets.push((loc, map));
+                let node = lib.compile(&mut builder, text, id).map_err(|d| shape_error(&snippets, d))?;
+                nodes.push(node);
+                objects.push(Object {
+                    name,
+                    material,
+                    source: text.to_string(),
+                    shape: Shape::from_tape(builder.tape(node)),
+                });
+            }
+        }
+    }
+    top.finish(TOP_KEYS)?;
+    if objects.is_empty() {
+        return Err(src.error(Origin::Implicit, "the scene has no objects", None, &["add at least one [[object]] with a `shape`".into()]));
+    }
+
+    // The scene's distance: union, or smooth union with k = blend, folded in file order.
+    let mut acc = nodes[0];
+    for &n in &nodes[1..] {
+        acc = smooth_union(&mut builder, acc, n, render.blend);
+    }
+    let shape = Shape::from_tape(builder.tape(acc));
+    Ok(Scene {
+        camera,
+        render,
+        lights,
+        materials,
+        objects,
+        params,
+        shape,
+    })
+}
+
+/// All keys of `[render]`.
+pub const RENDER_KEYS: &[&str] = &[
+    "width",
+    "height",
+    "aa",
+    "max_steps",
+    "hit_epsilon",
+    "relative_epsilon",
+    "max_distance",
+    "step_scale",
+    "normals",
+    "normal_epsilon",
+    "shadows",
+    "shadow_exponent",
+    "shadow_start",
+    "shadow_max_distance",
+    "shadow_max_steps",
+    "ao",
+    "ao_samples",
+    "ao_step",
+    "ao_intensity",
+    "background",
+    "blend",
+    "view",
+];
+
+/// min(a,b) − max(k−|a−b|,0)²/(4k), or min(a, b) when k = 0.
+fn smooth_union(b: &mut Builder, x: isoray_shape::Node, y: isoray_shape::Node, k: f64) -> isoray_shape::Node {
+    if k <= 0.0 {
+        return b.min(x, y);
+    }
+    let d = b.sub(x, y);
+    let ad = b.abs(d);
+    let kc = b.constant(k);
+    let kd = b.sub(kc, ad);
+    let zero = b.constant(0.0);
+    let h = b.max(kd, zero);
+    let h2 = b.square(h);
+    let corr = b.mul_c(h2, 0.25 / k);
+    let m = b.min(x, y);
+    b.sub(m, corr)
+}
+
+fn check_name(src: &Sources, name: &str, origin: Origin) -> Result<()> {
+    let ok = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_') && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+    if !ok || isoray_shape::syntax::KEYWORDS.contains(&name) || name == "p" {
+        return Err(src.error(origin, format!("`{name}` cannot be used as a name in shape text"), Some("expected letters, digits and `_`, not a keyword or `p`"), &[]));
+    }
+    Ok(())
+}
+
+fn param_value(src: &Sources, v: &Located, ctx: &str) -> Result<Value> {
+    let bad = || src.error(v.origin, format!("`{ctx}`: expected a number or an array of 2 or 3 numbers, found {}", describe(&v.item)), Some("expected a number or vector"), &[]);
+    match &v.item {
+        Item::Num(x, _) if x.is_finite() => Ok(Value::Float(*x)),
+        Item::Array(items) => {
+            let mut xs = Vec::new();
+            for it in items {
+                match it.item {
+                    Item::Num(x, _) if x.is_finite() => xs.push(x),
+                    _ => return Err(bad()),
+                }
+            }
+            match xs[..] {
+                [x, y] => Ok(Value::Vec2([x, y])),
+                [x, y, z] => Ok(Value::Vec3([x, y, z])),
+                _ => Err(bad()),
+            }
+        }
+        _ => Err(bad()),
+    }
+}
+
+fn sub(a: Vec3, b: Vec3) -> Vec3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn cross(a: Vec3, b: Vec3) -> Vec3 {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+fn norm(a: Vec3) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+fn normalize(a: Vec3) -> Vec3 {
+    let n = norm(a);
+    [a[0] / n, a[1] / n, a[2] / n]
+}

@@ -1,0 +1,265 @@
+//! The scene model: camera, render settings, lights, materials, objects.
+//! Every field has a documented default (see `docs/SCENE.md`).
+
+use isoray_shape::{Shape, Value};
+
+/// A colour or vector of three components.
+pub type Vec3 = [f64; 3];
+
+/// The pinhole camera.
+///
+/// Pixel (i, j), i to the right and j downwards, has its centre at
+/// ndc = ((i+0.5)/W*2-1, 1-(j+0.5)/H*2); its ray leaves `position` in the
+/// direction normalize(forward + ndc.x·tan(fov/2)·aspect·right + ndc.y·tan(fov/2)·up),
+/// with aspect = W/H, forward = normalize(target − position),
+/// right = normalize(forward × up), and up re-orthogonalised as right × forward.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub position: Vec3,
+    /// Point looked at.
+    pub target: Vec3,
+    /// Approximate up direction (default +y).
+    pub up: Vec3,
+    /// Vertical field of view in degrees (default 40).
+    pub fov: f64,
+}
+
+/// Normal estimation for shading.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NormalMethod {
+    /// Central differences (6 evaluations).
+    Central,
+    /// Forward differences (4 evaluations).
+    Forward,
+    /// The tetrahedron technique (4 evaluations).
+    Tetrahedron,
+    /// Forward-mode automatic differentiation (exact).
+    Analytic,
+}
+
+/// Shadow technique.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShadowMode {
+    /// No shadows.
+    None,
+    /// A shadow ray either reaches the light or not.
+    Hard,
+    /// Penumbra from the closest approach: min(k·h/t), k = 1/size.
+    Soft,
+    /// Penumbra estimate that tolerates slight penetration (smooth, no banding).
+    Improved,
+}
+
+/// What the image shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum View {
+    /// Lit and shaded.
+    Shaded,
+    /// Debug: a heat map of sphere-tracing steps per pixel.
+    Steps,
+    /// Debug: world-space normals mapped to colours.
+    Normals,
+}
+
+/// Render settings (`[render]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderSettings {
+    /// Image width in pixels (default 960).
+    pub width: u32,
+    /// Image height in pixels (default 540).
+    pub height: u32,
+    /// Supersampling factor: aa×aa samples per pixel on a uniform grid (default 1).
+    pub aa: u32,
+    /// Maximum sphere-tracing steps per ray (default 256).
+    pub max_steps: u32,
+    /// A ray hits when the distance falls below this (default 1e-4).
+    pub hit_epsilon: f64,
+    /// Hit when d < hit_epsilon·t instead (default false).
+    pub relative_epsilon: bool,
+    /// Rays stop beyond this distance (default 100).
+    pub max_distance: f64,
+    /// Step = d·step_scale; below 1 for distance bounds that overestimate (default 1).
+    pub step_scale: f64,
+    /// Normal estimation (default tetrahedron).
+    pub normals: NormalMethod,
+    /// Finite-difference step for normals (default 1e-3).
+    pub normal_epsilon: f64,
+    /// Shadow technique (default soft).
+    pub shadows: ShadowMode,
+    /// The shadow term is raised to this power (default 1).
+    pub shadow_exponent: f64,
+    /// Shadow rays start this far from the surface (default 0.01).
+    pub shadow_start: f64,
+    /// Shadow rays stop after this distance (default 20).
+    pub shadow_max_distance: f64,
+    /// Maximum steps of a shadow ray (default 128).
+    pub shadow_max_steps: u32,
+    /// Ambient occlusion on (default true).
+    pub ao: bool,
+    /// AO samples along the normal (default 5).
+    pub ao_samples: u32,
+    /// Distance between AO samples (default 0.05).
+    pub ao_step: f64,
+    /// AO strength (default 1).
+    pub ao_intensity: f64,
+    /// Colour of rays that miss (linear RGB, default 0.95 grey).
+    pub background: Vec3,
+    /// 0: objects combine by union; k > 0: smooth union with this k (default 0).
+    pub blend: f64,
+    /// What the image shows (default shaded).
+    pub view: View,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 960,
+            height: 540,
+            aa: 1,
+            max_steps: 256,
+            hit_epsilon: 1e-4,
+            relative_epsilon: false,
+            max_distance: 100.0,
+            step_scale: 1.0,
+            normals: NormalMethod::Tetrahedron,
+            normal_epsilon: 1e-3,
+            shadows: ShadowMode::Soft,
+            shadow_exponent: 1.0,
+            shadow_start: 0.01,
+            shadow_max_distance: 20.0,
+            shadow_max_steps: 128,
+            ao: true,
+            ao_samples: 5,
+            ao_step: 0.05,
+            ao_intensity: 1.0,
+            background: [0.95, 0.95, 0.95],
+            blend: 0.0,
+            view: View::Shaded,
+        }
+    }
+}
+
+/// The kind of a light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LightKind {
+    /// At infinity; `direction` points towards the light (normalised).
+    Directional {
+        /// Unit vector towards the light.
+        direction: Vec3,
+    },
+    /// At a point.
+    Point {
+        /// Where it is.
+        position: Vec3,
+    },
+}
+
+/// A light (`[[light]]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Light {
+    /// Directional or point.
+    pub kind: LightKind,
+    /// Linear RGB colour (default white).
+    pub color: Vec3,
+    /// Multiplies the colour (default 1).
+    pub intensity: f64,
+    /// Soft-shadow penumbra size: k = 1/size (default 0.1).
+    pub size: f64,
+    /// Point lights: 1/(c + l·d + q·d²) with [c, l, q] (default [1, 0, 0]: none).
+    pub attenuation: Vec3,
+}
+
+/// The specular model of a material.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShadingModel {
+    /// Phong: (R·V)^n.
+    Phong,
+    /// Blinn-Phong: (N·H)^n.
+    BlinnPhong,
+}
+
+/// How the specular cosine is raised to the shininess.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SpecularFunction {
+    /// cos^n.
+    Pow,
+    /// Schlick's rational approximation t / (n − n·t + t).
+    Schlick,
+}
+
+/// A material (`[material.NAME]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// Its name.
+    pub name: String,
+    /// Ambient reflectance (default 0.1 grey).
+    pub ambient: Vec3,
+    /// Diffuse reflectance (default 0.8 grey).
+    pub diffuse: Vec3,
+    /// Specular reflectance (default 0.5 grey).
+    pub specular: Vec3,
+    /// Specular exponent (default 32).
+    pub shininess: f64,
+    /// Emitted light, added unshadowed (default black).
+    pub emission: Vec3,
+    /// Phong or Blinn-Phong (default Blinn-Phong).
+    pub model: ShadingModel,
+    /// Pow or Schlick (default pow).
+    pub specular_function: SpecularFunction,
+}
+
+impl Material {
+    /// The material of objects that name none.
+    pub fn default_named(name: &str) -> Material {
+        Material {
+            name: name.to_string(),
+            ambient: [0.1; 3],
+            diffuse: [0.8; 3],
+            specular: [0.5; 3],
+            shininess: 32.0,
+            emission: [0.0; 3],
+            model: ShadingModel::BlinnPhong,
+            specular_function: SpecularFunction::Pow,
+        }
+    }
+}
+
+/// An object (`[[object]]`): a shape with a material.
+#[derive(Debug, Clone)]
+pub struct Object {
+    /// Optional name.
+    pub name: Option<String>,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// The shape text as written.
+    pub source: String,
+    /// The compiled shape.
+    pub shape: Shape,
+}
+
+/// A loaded, checked and compiled scene.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The camera.
+    pub camera: Camera,
+    /// Render settings.
+    pub render: RenderSettings,
+    /// Lights in file order.
+    pub lights: Vec<Light>,
+    /// Materials; objects refer to them by index.
+    pub materials: Vec<Material>,
+    /// Objects in file order.
+    pub objects: Vec<Object>,
+    /// The scene's named parameters (`[params]`).
+    pub params: Vec<(String, Value)>,
+    /// The whole scene's distance: the union (or smooth union) of the objects.
+    pub shape: Shape,
+}
+
+impl Scene {
+    /// The scene's signed distance at a point.
+    pub fn distance(&self, p: [f64; 3]) -> f64 {
+        self.shape.eval(p)
+    }
+}

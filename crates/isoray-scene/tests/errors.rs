@@ -1,0 +1,132 @@
+//! Malformed scenes give located errors, never panics; overrides work.
+
+use isoray_scene::{load, load_str, ShadowMode};
+
+fn err(text: &str) -> isoray_scene::SceneError {
+    load_str(text, "bad.toml", &[]).expect_err("should fail")
+}
+
+const OK: &str = "[[object]]\nshape = \"sphere(p, 1.0)\"\n";
+
+#[test]
+fn toml_syntax_error_is_located() {
+    let e = err("[render]\nwidth = = 3\n");
+    assert_eq!(e.line, Some(2), "{e}");
+    assert!(e.rendered.contains("bad.toml:2:"), "{e}");
+}
+
+#[test]
+fn wrong_type_names_key_line_and_expectation() {
+    let e = err(&format!("[render]\nwidth = \"wide\"\n{OK}"));
+    assert_eq!((e.line, e.column), (Some(2), Some(9)), "{e}");
+    assert!(e.message.contains("render.width") && e.message.contains("integer"), "{e}");
+    let e = err(&format!("[camera]\nposition = [1.0, 2.0]\n{OK}"));
+    assert!(e.message.contains("array of 3 numbers"), "{e}");
+    let e = err(&format!("[render]\nshadows = \"sofft\"\n{OK}"));
+    assert!(e.rendered.contains("did you mean \"soft\"?"), "{e}");
+}
+
+#[test]
+fn unknown_keys_are_rejected_with_suggestions() {
+    let e = err(&format!("[render]\nwidht = 3\n{OK}"));
+    assert_eq!(e.line, Some(2));
+    assert!(e.rendered.contains("did you mean `width`?"), "{e}");
+    let e = err(&format!("[rendr]\nwidth = 3\n{OK}"));
+    assert!(e.rendered.contains("did you mean `render`?"), "{e}");
+}
+
+#[test]
+fn shape_errors_point_into_the_toml_string() {
+    let text = "[[object]]\nshape = \"sphere(p + vec2(1.0, 2.0), 1.0)\"\n";
+    let e = err(text);
+    assert_eq!(e.line, Some(2));
+    // The caret starts at `p + vec2(...)`, column 17 of line 2.
+    assert_eq!(e.column, Some(17), "{e}");
+    assert!(e.message.contains("cannot add `vec3` and `vec2`"), "{e}");
+    assert!(e.rendered.contains(&format!("{} vec3 + vec2", "^".repeat(18))), "{e}");
+
+    let e = err("[[object]]\nshape = \"sphre(p, 1.0)\"\n");
+    assert!(e.message.contains("unknown function `sphre`") && e.rendered.contains("did you mean `sphere`?"), "{e}");
+    let e = err("[[object]]\nshape = \"sphere(p, 1.0, 2.0)\"\n");
+    assert!(e.message.contains("takes 2 argument(s), found 3"), "{e}");
+    let e = err("[[object]]\nshape = '''\nlet r = 1.0;\nsphere(p, q)'''\n");
+    assert_eq!((e.line, e.column), (Some(4), Some(11)), "{e}");
+}
+
+#[test]
+fn surface_errors_and_user_primitives() {
+    let text = "[surface.ring]\nparams = { R = 1.0, r = 0.25 }\nsdf = \"length(vec2(length(p.xz) - R, p.y)) - r\"\n[[object]]\nshape = \"ring(p, 2.0)\"\n";
+    let s = load_str(text, "ok.toml", &[]).unwrap();
+    // R = 2 given, r = 0.25 by default.
+    assert!((s.distance([2.25, 0.0, 0.0])).abs() < 1e-12);
+    let e = err("[surface.ring]\nsdf = \"length(p.xw)\"\n[[object]]\nshape = \"ring(p)\"\n");
+    assert_eq!(e.line, Some(2));
+    assert!(e.message.contains("`.w`") || e.message.contains("component"), "{e}");
+    let e = err("[surface.a]\nsdf = \"b(p)\"\n[surface.b]\nsdf = \"a(p)\"\n[[object]]\nshape = \"a(p)\"\n");
+    assert!(e.message.contains("calls itself"), "{e}");
+}
+
+#[test]
+fn semantic_errors() {
+    let e = err("[[object]]\nmaterial = \"gld\"\nshape = \"sphere(p, 1.0)\"\n[material.gold]\n");
+    assert!(e.message.contains("no material named \"gld\"") && e.rendered.contains("did you mean \"gold\"?"), "{e}");
+    let e = err("[camera]\nposition = [0.0, 0.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
+    assert!(e.message.contains("no direction"), "{e}");
+    let e = err("[render]\nwidth = 10\n");
+    assert!(e.message.contains("no objects"), "{e}");
+    let e = err("[[light]]\nkind = \"point\"\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
+    assert!(e.message.contains("needs a `position`"), "{e}");
+}
+
+#[test]
+fn overrides() {
+    let text = "[render]\nshadows = \"soft\"\n[[light]]\nintensity = 1.0\n[[object]]\nshape = \"sphere(p, 1.0)\"\n";
+    let s = load_str(text, "s.toml", &["render.shadows=hard".into(), "light.0.intensity=2".into(), "render.aa=3".into()]).unwrap();
+    assert_eq!(s.render.shadows, ShadowMode::Hard);
+    assert_eq!(s.lights[0].intensity, 2.0);
+    assert_eq!(s.render.aa, 3);
+    let s = load_str(text, "s.toml", &["object.0.shape=sphere(p, 2.0)".into(), "params.k=0.5".into()]).unwrap();
+    assert!((s.distance([3.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
+    for (ov, want) in [
+        ("light.5.intensity=2", "out of range"),
+        ("render.width=abc", "render.width"),
+        ("render", "KEY=VALUE"),
+        ("object.0.shape=sphere(p)", "takes 2 argument"),
+    ] {
+        let e = load_str(text, "s.toml", &[ov.into()]).expect_err(ov);
+        assert!(e.message.contains(want), "{ov}: {e}");
+        assert_eq!(e.file, "--set", "{ov}: {e}");
+    }
+}
+
+#[test]
+fn missing_file_is_an_io_error() {
+    let e = load(std::path::Path::new("/nonexistent/scene.toml"), &[]).unwrap_err();
+    assert!(e.io && e.message.contains("cannot read"), "{e}");
+}
+
+#[test]
+fn examples_load() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let mut n = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            load(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            n += 1;
+        }
+    }
+    assert!(n >= 1);
+}
+
+#[test]
+fn garbage_never_panics() {
+    let samples = [
+        "", "[", "]]", "a = ", "[[object]]", "[[object]]\nshape = 3", "[[object]]\nshape = \"\"", "[[object]]\nshape = \"((((\"",
+        "[camera]\nfov = -1\n", "[render]\naa = 0\n", "[render]\nbackground = [1, -1, 0]\n", "[light]\nkind = 3\n",
+        "object = 5", "[material]\nx = 1\n", "[params]\np = 1\n", "[surface.x]\nparams = 3\n", "[[object]]\nshape = \"sphere(p, 1.0)\"\n[params]\nk = [1]\n",
+    ];
+    for s in samples {
+        assert!(load_str(s, "g.toml", &[]).is_err(), "{s:?} should be rejected");
+    }
+}
