@@ -1,1 +1,528 @@
-//! placeholder
+//! # isoray-render
+//!
+//! The CPU sphere tracer of isoray. Rays are traced in tiles of
+//! [`TILE`]×[`TILE`] pixels, each tile as a wavefront: every sphere-tracing
+//! step evaluates all active rays of the tile with one batch call of the
+//! shape tape. Shading is Phong/Blinn-Phong with hard, soft or improved soft
+//! shadows and ambient occlusion; antialiasing is aa×aa supersampling.
+//! Colours are linear inside; sRGB happens once, when a PNG is written.
+//!
+//! Tiles run in parallel with rayon, and every pixel is computed the same way
+//! whatever the thread count, so images are byte-identical across thread counts.
+//!
+//! ```
+//! let scene = isoray_scene::load_str(r#"
+//! [camera]
+//! position = [0.0, 0.0, 4.0]
+//! [render]
+//! width = 32
+//! height = 24
+//! [[light]]
+//! [[object]]
+//! shape = "sphere(p, 1.0)"
+//! "#, "doc.toml", &[]).unwrap();
+//! let (image, stats) = isoray_render::render(&scene, &isoray_render::RenderOptions::default());
+//! assert_eq!(image.color.len(), 32 * 24);
+//! assert_eq!(stats.primary_rays, 32 * 24);
+//! ```
+
+pub mod camera;
+pub mod output;
+pub mod shade;
+pub mod trace;
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::Vec3;
+use isoray_scene::{LightKind, NormalMethod, Scene, ShadowMode, View};
+use isoray_shape::{BatchEvaluator, GradientMode};
+use rayon::prelude::*;
+
+use camera::RayCamera;
+use shade::Surface;
+use trace::{shadow_march, sphere_trace, Hit, Rays, Scratch};
+
+/// Tile edge in pixels.
+pub const TILE: u32 = 16;
+
+/// What to compute besides the colour.
+#[derive(Debug, Default)]
+pub struct RenderOptions {
+    /// Compute the depth and normal AOVs (one ray through each pixel centre).
+    pub aovs: bool,
+    /// Incremented once per finished tile (for progress bars).
+    pub progress: Option<std::sync::Arc<AtomicUsize>>,
+}
+
+/// A rendered image and its AOVs, row-major from the top-left pixel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderedImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Linear RGB.
+    pub color: Vec<[f32; 3]>,
+    /// Distance t along the primary ray through the pixel centre; +inf on a miss.
+    pub depth: Option<Vec<f32>>,
+    /// World-space unit normal at the pixel-centre hit; 0 on a miss.
+    pub normals: Option<Vec<[f32; 3]>>,
+}
+
+/// Work counters.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Primary rays (pixels × aa²).
+    pub primary_rays: u64,
+    /// Distance-function evaluations of all kinds.
+    pub evaluations: u64,
+}
+
+/// Number of tiles an image of the scene's size is split into.
+pub fn tile_count(scene: &Scene) -> usize {
+    let (w, h) = (scene.render.width, scene.render.height);
+    (w.div_ceil(TILE) * h.div_ceil(TILE)) as usize
+}
+
+struct TileOut {
+    x0: u32,
+    y0: u32,
+    w: u32,
+    h: u32,
+    color: Vec<[f32; 3]>,
+    depth: Vec<f32>,
+    normals: Vec<[f32; 3]>,
+    evals: u64,
+}
+
+/// Renders the scene.
+pub fn render(scene: &Scene, opts: &RenderOptions) -> (RenderedImage, Stats) {
+    let (w, h) = (scene.render.width, scene.render.height);
+    let cam = RayCamera::new(&scene.camera, w, h);
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
+        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
+        .collect();
+    let ctx = Ctx::new(scene, cam);
+    let outs: Vec<TileOut> = tiles
+        .par_iter()
+        .map_init(
+            || Worker::new(&ctx),
+            |wk, &(x0, y0)| {
+                let out = wk.tile(&ctx, x0, y0, TILE.min(w - x0), TILE.min(h - y0), opts.aovs);
+                if let Some(p) = &opts.progress {
+                    p.fetch_add(1, Ordering::Relaxed);
+                }
+                out
+            },
+        )
+        .collect();
+    let n = (w * h) as usize;
+    let mut img = RenderedImage {
+        width: w,
+        height: h,
+        color: vec![[0.0; 3]; n],
+        depth: opts.aovs.then(|| vec![f32::INFINITY; n]),
+        normals: opts.aovs.then(|| vec![[0.0; 3]; n]),
+    };
+    let mut evals = 0;
+    for t in outs {
+        evals += t.evals;
+        for j in 0..t.h {
+            for i in 0..t.w {
+                let src = (j * t.w + i) as usize;
+                let dst = ((t.y0 + j) * w + t.x0 + i) as usize;
+                img.color[dst] = t.color[src];
+                if let Some(d) = &mut img.depth {
+                    d[dst] = t.depth[src];
+                }
+                if let Some(nm) = &mut img.normals {
+                    nm[dst] = t.normals[src];
+                }
+            }
+        }
+    }
+    let aa = scene.render.aa as u64;
+    (
+        img,
+        Stats {
+            primary_rays: n as u64 * aa * aa,
+            evaluations: evals,
+        },
+    )
+}
+
+/// Read-only render context shared by all workers.
+struct Ctx<'s> {
+    scene: &'s Scene,
+    cam: RayCamera,
+    surfaces: Vec<Surface>,
+    gradient: GradientMode,
+}
+
+impl<'s> Ctx<'s> {
+    fn new(scene: &'s Scene, cam: RayCamera) -> Self {
+        let h = scene.render.normal_epsilon;
+        let gradient = match scene.render.normals {
+            NormalMethod::Central => GradientMode::Central(h),
+            NormalMethod::Forward => GradientMode::Forward(h),
+            NormalMethod::Tetrahedron => GradientMode::Tetrahedron(h),
+            NormalMethod::Analytic => GradientMode::Dual,
+        };
+        let surfaces = scene
+            .objects
+            .iter()
+            .map(|o| Surface::from(&scene.materials[o.material]))
+            .collect();
+        Ctx {
+            scene,
+            cam,
+            surfaces,
+            gradient,
+        }
+    }
+}
+
+/// Per-thread state: evaluators and scratch buffers.
+struct Worker<'s> {
+    scene_eval: BatchEvaluator<'s, f32>,
+    object_evals: Vec<BatchEvaluator<'s, f32>>,
+    scratch: Scratch,
+    rays: Rays,
+    hits: Vec<Hit>,
+}
+
+/// Geometry of the hit samples of a packet.
+#[derive(Default)]
+struct HitSet {
+    /// Sample index of each hit.
+    idx: Vec<usize>,
+    px: Vec<f32>,
+    py: Vec<f32>,
+    pz: Vec<f32>,
+    nx: Vec<f32>,
+    ny: Vec<f32>,
+    nz: Vec<f32>,
+}
+
+impl<'s> Worker<'s> {
+    fn new(ctx: &Ctx<'s>) -> Self {
+        let object_evals = if ctx.scene.objects.len() > 1 {
+            ctx.scene
+                .objects
+                .iter()
+                .map(|o| BatchEvaluator::new(o.shape.tape()))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Worker {
+            scene_eval: BatchEvaluator::new(ctx.scene.shape.tape()),
+            object_evals,
+            scratch: Scratch::default(),
+            rays: Rays::default(),
+            hits: Vec::new(),
+        }
+    }
+
+    /// Traces `self.rays` and computes hit positions and normals.
+    fn trace_and_normals(&mut self, ctx: &Ctx) -> (HitSet, u64) {
+        let s = &ctx.scene.render;
+        let mut evals = sphere_trace(
+            &mut self.scene_eval,
+            &self.rays,
+            s,
+            &mut self.scratch,
+            &mut self.hits,
+        );
+        let mut hs = HitSet::default();
+        for (i, h) in self.hits.iter().enumerate() {
+            if h.t.is_finite() {
+                hs.idx.push(i);
+                hs.px.push(self.rays.ox[i] + self.rays.dx[i] * h.t);
+                hs.py.push(self.rays.oy[i] + self.rays.dy[i] * h.t);
+                hs.pz.push(self.rays.oz[i] + self.rays.dz[i] * h.t);
+            }
+        }
+        let m = hs.idx.len();
+        hs.nx.resize(m, 0.0);
+        hs.ny.resize(m, 0.0);
+        hs.nz.resize(m, 0.0);
+        self.scene_eval.gradients(
+            &hs.px,
+            &hs.py,
+            &hs.pz,
+            ctx.gradient,
+            &mut hs.nx,
+            &mut hs.ny,
+            &mut hs.nz,
+        );
+        evals += m as u64 * gradient_cost(ctx.gradient);
+        for k in 0..m {
+            let n = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]).normalize_or_zero();
+            // Degenerate gradient: face the viewer.
+            let i = hs.idx[k];
+            let n = if n == Vec3::ZERO {
+                -Vec3::new(self.rays.dx[i], self.rays.dy[i], self.rays.dz[i])
+            } else {
+                n
+            };
+            hs.nx[k] = n.x;
+            hs.ny[k] = n.y;
+            hs.nz[k] = n.z;
+        }
+        (hs, evals)
+    }
+
+    fn tile(&mut self, ctx: &Ctx, x0: u32, y0: u32, tw: u32, th: u32, aovs: bool) -> TileOut {
+        let s = &ctx.scene.render;
+        let aa = s.aa;
+        let origin = ctx.cam.origin().as_vec3().to_array();
+        // Primary rays: aa×aa per pixel at the centres of a uniform sub-grid.
+        self.rays.clear();
+        for j in 0..th {
+            for i in 0..tw {
+                for sy in 0..aa {
+                    for sx in 0..aa {
+                        let x = (x0 + i) as f64 + (sx as f64 + 0.5) / aa as f64;
+                        let y = (y0 + j) as f64 + (sy as f64 + 0.5) / aa as f64;
+                        self.rays
+                            .push(origin, ctx.cam.direction(x, y).as_vec3().to_array());
+                    }
+                }
+            }
+        }
+        let (hs, mut evals) = self.trace_and_normals(ctx);
+        let mut samples = vec![Vec3::from(s.background.map(|c| c as f32)); self.rays.len()];
+        match s.view {
+            View::Steps => {
+                for (i, h) in self.hits.iter().enumerate() {
+                    samples[i] = heat(h.steps as f32 / s.max_steps as f32);
+                }
+            }
+            View::Normals => {
+                for (k, &i) in hs.idx.iter().enumerate() {
+                    samples[i] = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]) * 0.5 + 0.5;
+                }
+            }
+            View::Shaded => evals += self.shade(ctx, &hs, &mut samples),
+        }
+        let spp = (aa * aa) as usize;
+        let inv = 1.0 / spp as f32;
+        let color: Vec<[f32; 3]> = samples
+            .chunks(spp)
+            .map(|c| (c.iter().copied().sum::<Vec3>() * inv).to_array())
+            .collect();
+
+        let (mut depth, mut normals) = (Vec::new(), Vec::new());
+        if aovs {
+            self.rays.clear();
+            for j in 0..th {
+                for i in 0..tw {
+                    let d = ctx
+                        .cam
+                        .direction((x0 + i) as f64 + 0.5, (y0 + j) as f64 + 0.5);
+                    self.rays.push(origin, d.as_vec3().to_array());
+                }
+            }
+            let (hs, e) = self.trace_and_normals(ctx);
+            evals += e;
+            depth = self.hits.iter().map(|h| h.t).collect();
+            normals = vec![[0.0; 3]; self.rays.len()];
+            for (k, &i) in hs.idx.iter().enumerate() {
+                normals[i] = [hs.nx[k], hs.ny[k], hs.nz[k]];
+            }
+        }
+        TileOut {
+            x0,
+            y0,
+            w: tw,
+            h: th,
+            color,
+            depth,
+            normals,
+            evals,
+        }
+    }
+
+    /// Shades the hit samples. Returns evaluations spent.
+    fn shade(&mut self, ctx: &Ctx, hs: &HitSet, samples: &mut [Vec3]) -> u64 {
+        let scene = ctx.scene;
+        let s = &scene.render;
+        let m = hs.idx.len();
+        if m == 0 {
+            return 0;
+        }
+        let mut evals = 0u64;
+        let surfaces = self.materials(ctx, hs, &mut evals);
+        let ao = self.ambient_occlusion(s, hs, &mut evals);
+        let pos = |k: usize| Vec3::new(hs.px[k], hs.py[k], hs.pz[k]);
+        let nrm = |k: usize| Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]);
+        let mut color: Vec<Vec3> = (0..m)
+            .map(|k| surfaces[k].emission + surfaces[k].ambient * ao[k])
+            .collect();
+
+        let mut shadow_rays = Rays::default();
+        let mut tmax = Vec::new();
+        let mut which = Vec::new();
+        let mut vis = Vec::new();
+        for light in &scene.lights {
+            let radiance = Vec3::from(light.color.map(|c| c as f32)) * light.intensity as f32;
+            shadow_rays.clear();
+            tmax.clear();
+            which.clear();
+            let mut dirs = Vec::with_capacity(m);
+            let mut atten = Vec::with_capacity(m);
+            for k in 0..m {
+                let p = pos(k);
+                let (l, dist) = match light.kind {
+                    LightKind::Directional { direction } => {
+                        (Vec3::from(direction.map(|c| c as f32)), f32::INFINITY)
+                    }
+                    LightKind::Point { position } => {
+                        let v = Vec3::from(position.map(|c| c as f32)) - p;
+                        (v.normalize_or_zero(), v.length())
+                    }
+                };
+                let a = light.attenuation;
+                let att = if dist.is_finite() {
+                    1.0 / (a[0] as f32 + a[1] as f32 * dist + a[2] as f32 * dist * dist).max(1e-12)
+                } else {
+                    1.0
+                };
+                dirs.push(l);
+                atten.push(att);
+                if nrm(k).dot(l) > 0.0 {
+                    which.push(k);
+                    let o = p + nrm(k) * (2.0 * s.hit_epsilon as f32);
+                    shadow_rays.push(o.to_array(), l.to_array());
+                    tmax.push(dist.min(s.shadow_max_distance as f32));
+                }
+            }
+            evals += shadow_march(
+                &mut self.scene_eval,
+                &shadow_rays,
+                &tmax,
+                s.shadows,
+                light.size as f32,
+                s,
+                &mut self.scratch,
+                &mut vis,
+            );
+            for (r, &k) in which.iter().enumerate() {
+                let i = hs.idx[k];
+                let v = -Vec3::new(self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]);
+                let mut sh = vis[r];
+                if s.shadows != ShadowMode::None && s.shadow_exponent != 1.0 {
+                    sh = sh.powf(s.shadow_exponent as f32);
+                }
+                color[k] +=
+                    radiance * atten[k] * sh * shade::direct(&surfaces[k], nrm(k), v, dirs[k]);
+            }
+        }
+        for (k, &i) in hs.idx.iter().enumerate() {
+            samples[i] = color[k];
+        }
+        evals
+    }
+
+    /// The material at each hit: the closest object's, or with `blend` > 0 a
+    /// mix following the smooth union's blend factor.
+    fn materials(&mut self, ctx: &Ctx, hs: &HitSet, evals: &mut u64) -> Vec<Surface> {
+        let m = hs.idx.len();
+        if self.object_evals.is_empty() {
+            return vec![ctx.surfaces[0]; m];
+        }
+        let k = ctx.scene.render.blend as f32;
+        let mut acc_d = vec![0.0f32; m];
+        let mut d = vec![0.0f32; m];
+        let mut out = vec![ctx.surfaces[0]; m];
+        for (j, ev) in self.object_evals.iter_mut().enumerate() {
+            let target = if j == 0 { &mut acc_d } else { &mut d };
+            ev.eval(&hs.px, &hs.py, &hs.pz, target);
+            *evals += m as u64;
+            if j == 0 {
+                continue;
+            }
+            for q in 0..m {
+                let (a, b) = (acc_d[q], d[q]);
+                if k > 0.0 {
+                    let h = (0.5 + 0.5 * (a - b) / k).clamp(0.0, 1.0);
+                    out[q] = out[q].mix(&ctx.surfaces[j], h);
+                    let hh = (k - (a - b).abs()).max(0.0);
+                    acc_d[q] = a.min(b) - hh * hh * 0.25 / k;
+                } else if b < a {
+                    out[q] = ctx.surfaces[j];
+                    acc_d[q] = b;
+                }
+            }
+        }
+        out
+    }
+
+    /// Ambient occlusion by sampling the distance along the normal:
+    /// ao = clamp(1 − intensity · Σᵢ wᵢ (iδ − d(p + iδn)) / (iδ), 0, 1),
+    /// with weights wᵢ ∝ 2⁻ⁱ normalised to sum to 1.
+    fn ambient_occlusion(
+        &mut self,
+        s: &isoray_scene::RenderSettings,
+        hs: &HitSet,
+        evals: &mut u64,
+    ) -> Vec<f32> {
+        let m = hs.idx.len();
+        if !s.ao || s.ao_intensity == 0.0 {
+            return vec![1.0; m];
+        }
+        let n = s.ao_samples as usize;
+        let step = s.ao_step as f32;
+        let (mut xs, mut ys, mut zs) = (
+            Vec::with_capacity(m * n),
+            Vec::with_capacity(m * n),
+            Vec::with_capacity(m * n),
+        );
+        for i in 1..=n {
+            let h = step * i as f32;
+            for k in 0..m {
+                xs.push(hs.px[k] + hs.nx[k] * h);
+                ys.push(hs.py[k] + hs.ny[k] * h);
+                zs.push(hs.pz[k] + hs.nz[k] * h);
+            }
+        }
+        let mut ds = vec![0.0f32; m * n];
+        self.scene_eval.eval(&xs, &ys, &zs, &mut ds);
+        *evals += (m * n) as u64;
+        let wsum: f32 = (1..=n).map(|i| 0.5f32.powi(i as i32)).sum();
+        let mut occ = vec![0.0f32; m];
+        for i in 1..=n {
+            let h = step * i as f32;
+            let w = 0.5f32.powi(i as i32) / wsum;
+            for k in 0..m {
+                occ[k] += w * (h - ds[(i - 1) * m + k]) / h;
+            }
+        }
+        occ.iter()
+            .map(|o| (1.0 - s.ao_intensity as f32 * o).clamp(0.0, 1.0))
+            .collect()
+    }
+}
+
+fn gradient_cost(g: GradientMode) -> u64 {
+    match g {
+        GradientMode::Central(_) => 6,
+        GradientMode::Forward(_) | GradientMode::Tetrahedron(_) => 4,
+        GradientMode::Dual => 1,
+    }
+}
+
+/// A heat map from blue (0) through green and yellow to red (1).
+pub fn heat(x: f32) -> Vec3 {
+    let stops = [
+        Vec3::new(0.0, 0.0, 0.5),
+        Vec3::new(0.0, 0.3, 1.0),
+        Vec3::new(0.0, 0.8, 0.2),
+        Vec3::new(1.0, 0.9, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+    ];
+    let x = x.clamp(0.0, 1.0) * (stops.len() - 1) as f32;
+    let i = (x.floor() as usize).min(stops.len() - 2);
+    stops[i].lerp(stops[i + 1], x - i as f32)
+}

@@ -80,7 +80,12 @@ pub fn from_toml(table: &DeTable<'_>, text: &str) -> Vec<Entry> {
         .map(|(k, v)| Entry {
             key: k.get_ref().to_string(),
             key_origin: Origin::File(span(k.span())),
-            value: convert(v.get_ref(), span(v.span()), text, Origin::File(span(v.span()))),
+            value: convert(
+                v.get_ref(),
+                span(v.span()),
+                text,
+                Origin::File(span(v.span())),
+            ),
         })
         .collect()
 }
@@ -102,9 +107,15 @@ pub fn convert(v: &DeValue<'_>, sp: Span, text: &str, origin: Origin) -> Located
         }
         DeValue::Integer(i) => {
             let digits: String = i.as_str().chars().filter(|c| *c != '_').collect();
-            let v = i64::from_str_radix(digits.trim_start_matches("0x").trim_start_matches("0o").trim_start_matches("0b"), i.radix())
-                .map(|v| v as f64)
-                .unwrap_or(f64::NAN);
+            let v = i64::from_str_radix(
+                digits
+                    .trim_start_matches("0x")
+                    .trim_start_matches("0o")
+                    .trim_start_matches("0b"),
+                i.radix(),
+            )
+            .map(|v| v as f64)
+            .unwrap_or(f64::NAN);
             Item::Num(v, true)
         }
         DeValue::Float(f) => {
@@ -142,7 +153,11 @@ pub fn convert(v: &DeValue<'_>, sp: Span, text: &str, origin: Origin) -> Located
 /// Escapes map all their decoded bytes to the escape's first byte.
 pub fn string_map(text: &str, sp: Span, content_len: usize) -> Vec<usize> {
     let raw = text.get(sp.start..sp.end).unwrap_or("");
-    let fallback = || (0..=content_len).map(|i| sp.start + 1 + i).collect::<Vec<_>>();
+    let fallback = || {
+        (0..=content_len)
+            .map(|i| sp.start + 1 + i)
+            .collect::<Vec<_>>()
+    };
     let (delim, literal) = if raw.starts_with("\"\"\"") {
         (3, false)
     } else if raw.starts_with("'''") {
@@ -177,7 +192,10 @@ pub fn string_map(text: &str, sp: Span, content_len: usize) -> Vec<usize> {
                 b'u' | b'U' => {
                     let n = if next == b'u' { 4 } else { 8 };
                     let hex = body.get(i + 2..i + 2 + n).unwrap_or("0");
-                    let ch = u32::from_str_radix(hex, 16).ok().and_then(char::from_u32).unwrap_or('?');
+                    let ch = u32::from_str_radix(hex, 16)
+                        .ok()
+                        .and_then(char::from_u32)
+                        .unwrap_or('?');
                     map.extend(std::iter::repeat_n(base + i, ch.len_utf8()));
                     i += 2 + n;
                 }
@@ -212,7 +230,9 @@ mod tests {
     fn check(text: &str) {
         let t = DeTable::parse(text).unwrap();
         let entries = from_toml(t.get_ref(), text);
-        let Item::Str(s, map) = &entries[0].value.item else { panic!() };
+        let Item::Str(s, map) = &entries[0].value.item else {
+            panic!()
+        };
         // Every plain character of the content maps to the same character in the file.
         for (i, ch) in s.char_indices() {
             if ch.is_ascii_alphanumeric() && text.as_bytes()[map[i]] != b'\\' {

@@ -36,14 +36,27 @@ pub struct Sources {
 
 impl Sources {
     /// An error at `origin` (and, for file origins, a sub-span).
-    pub fn error(&self, origin: Origin, message: impl Into<String>, label: Option<&str>, notes: &[String]) -> SceneError {
+    pub fn error(
+        &self,
+        origin: Origin,
+        message: impl Into<String>,
+        label: Option<&str>,
+        notes: &[String],
+    ) -> SceneError {
         let message = message.into();
         match origin {
             Origin::File(span) => self.error_at(span, &message, label, notes),
             Origin::Override(i) => {
                 let text = self.overrides.get(i).cloned().unwrap_or_default();
                 let start = text.find('=').map(|e| e + 1).unwrap_or(0);
-                let rendered = render_snippet(&format!("--set #{}", i + 1), &text, Span::new(start, text.len()), &message, label, notes);
+                let rendered = render_snippet(
+                    &format!("--set #{}", i + 1),
+                    &text,
+                    Span::new(start, text.len()),
+                    &message,
+                    label,
+                    notes,
+                );
                 SceneError {
                     message,
                     file: "--set".into(),
@@ -71,7 +84,13 @@ impl Sources {
     }
 
     /// An error at a byte span of the file.
-    pub fn error_at(&self, span: Span, message: &str, label: Option<&str>, notes: &[String]) -> SceneError {
+    pub fn error_at(
+        &self,
+        span: Span,
+        message: &str,
+        label: Option<&str>,
+        notes: &[String],
+    ) -> SceneError {
         let (line, col) = line_col(&self.text, span.start);
         let rendered = render_snippet(&self.path, &self.text, span, message, label, notes);
         SceneError {

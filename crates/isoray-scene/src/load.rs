@@ -29,7 +29,10 @@ pub fn load_str(text: &str, name: &str, overrides: &[String]) -> Result<Scene> {
         overrides: overrides.to_vec(),
     };
     let table = DeTable::parse(text).map_err(|e| {
-        let span = e.span().map(|r| Span::new(r.start, r.end)).unwrap_or_default();
+        let span = e
+            .span()
+            .map(|r| Span::new(r.start, r.end))
+            .unwrap_or_default();
         let msg = e.message().trim().to_string();
         src.error_at(span, &format!("invalid TOML: {msg}"), None, &[])
     })?;
@@ -40,12 +43,19 @@ pub fn load_str(text: &str, name: &str, overrides: &[String]) -> Result<Scene> {
     build(&src, &root)
 }
 
-const TOP_KEYS: &[&str] = &["camera", "render", "light", "material", "surface", "object", "params"];
+const TOP_KEYS: &[&str] = &[
+    "camera", "render", "light", "material", "surface", "object", "params",
+];
 
 fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str) -> Result<()> {
     let origin = Origin::Override(index);
     let Some((key, value)) = text.split_once('=') else {
-        return Err(src.error(origin, format!("override `{text}` must have the form KEY=VALUE"), Some("expected KEY=VALUE"), &["for example: --set render.shadows=hard".into()]));
+        return Err(src.error(
+            origin,
+            format!("override `{text}` must have the form KEY=VALUE"),
+            Some("expected KEY=VALUE"),
+            &["for example: --set render.shadows=hard".into()],
+        ));
     };
     let key = key.trim();
     let value_text = value.trim();
@@ -58,7 +68,12 @@ fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str
     };
     let path: Vec<&str> = key.split('.').collect();
     if path.iter().any(|s| s.is_empty()) {
-        return Err(src.error(origin, format!("malformed key `{key}` in override"), Some("expected a dotted key such as render.aa or light.0.intensity"), &[]));
+        return Err(src.error(
+            origin,
+            format!("malformed key `{key}` in override"),
+            Some("expected a dotted key such as render.aa or light.0.intensity"),
+            &[],
+        ));
     }
     let mut table: &mut Vec<Entry> = root;
     let mut i = 0;
@@ -98,13 +113,20 @@ fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str
                 i += 1;
             }
             Item::Array(items) => {
-                let Some(idx_seg) = path.get(i + 1) else { unreachable!() };
+                let Some(idx_seg) = path.get(i + 1) else {
+                    unreachable!()
+                };
                 let n = items.len();
                 let Ok(idx) = idx_seg.parse::<usize>() else {
                     return Err(src.error(origin, format!("`{seg}` is an array: expected an index after `{seg}.`, found `{idx_seg}`"), Some("expected an index"), &[format!("for example: --set {seg}.0.…")]));
                 };
                 let Some(elem) = items.get_mut(idx) else {
-                    return Err(src.error(origin, format!("`{seg}` has {n} element(s); index {idx} is out of range"), Some("no such element"), &[]));
+                    return Err(src.error(
+                        origin,
+                        format!("`{seg}` has {n} element(s); index {idx} is out of range"),
+                        Some("no such element"),
+                        &[],
+                    ));
                 };
                 if i + 2 == path.len() {
                     *elem = value;
@@ -115,12 +137,28 @@ fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str
                         table = t;
                         i += 2;
                     }
-                    other => return Err(src.error(origin, format!("`{seg}.{idx}` is {}, not a table", other.type_name()), None, &[])),
+                    other => {
+                        return Err(src.error(
+                            origin,
+                            format!("`{seg}.{idx}` is {}, not a table", other.type_name()),
+                            None,
+                            &[],
+                        ))
+                    }
                 }
             }
             other => {
                 let tn = other.type_name();
-                return Err(src.error(origin, format!("`{}` is {tn}, so it has no key `{}`", path[..=i].join("."), path[i + 1]), Some("cannot set a key inside a value"), &[]));
+                return Err(src.error(
+                    origin,
+                    format!(
+                        "`{}` is {tn}, so it has no key `{}`",
+                        path[..=i].join("."),
+                        path[i + 1]
+                    ),
+                    Some("cannot set a key inside a value"),
+                    &[],
+                ));
             }
         }
     }
@@ -145,7 +183,12 @@ impl<'a> Reader<'a> {
                 origin: v.origin,
                 used: vec![false; entries.len()],
             }),
-            other => Err(src.error(v.origin, format!("`{ctx}` must be a table, found {}", other.type_name()), Some("expected a table"), &[])),
+            other => Err(src.error(
+                v.origin,
+                format!("`{ctx}` must be a table, found {}", other.type_name()),
+                Some("expected a table"),
+                &[],
+            )),
         }
     }
 
@@ -158,14 +201,26 @@ impl<'a> Reader<'a> {
     fn err(&self, v: &Located, key: &str, expected: &str) -> SceneError {
         self.src.error(
             v.origin,
-            format!("`{}.{key}`: expected {expected}, found {}", self.ctx, describe(&v.item)),
+            format!(
+                "`{}.{key}`: expected {expected}, found {}",
+                self.ctx,
+                describe(&v.item)
+            ),
             Some(&format!("expected {expected}")),
             &[],
         )
     }
 
-    fn num_in(&mut self, key: &str, default: f64, ok: impl Fn(f64) -> bool, expected: &str) -> Result<f64> {
-        let Some(v) = self.get(key) else { return Ok(default) };
+    fn num_in(
+        &mut self,
+        key: &str,
+        default: f64,
+        ok: impl Fn(f64) -> bool,
+        expected: &str,
+    ) -> Result<f64> {
+        let Some(v) = self.get(key) else {
+            return Ok(default);
+        };
         match v.item {
             Item::Num(x, _) if ok(x) => Ok(x),
             _ => Err(self.err(v, key, expected)),
@@ -173,7 +228,12 @@ impl<'a> Reader<'a> {
     }
 
     fn positive(&mut self, key: &str, default: f64) -> Result<f64> {
-        self.num_in(key, default, |x| x.is_finite() && x > 0.0, "a positive number")
+        self.num_in(
+            key,
+            default,
+            |x| x.is_finite() && x > 0.0,
+            "a positive number",
+        )
     }
 
     fn non_negative(&mut self, key: &str, default: f64) -> Result<f64> {
@@ -181,7 +241,9 @@ impl<'a> Reader<'a> {
     }
 
     fn int(&mut self, key: &str, default: u32, lo: u32, hi: u32) -> Result<u32> {
-        let Some(v) = self.get(key) else { return Ok(default) };
+        let Some(v) = self.get(key) else {
+            return Ok(default);
+        };
         match v.item {
             Item::Num(x, _) if x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => Ok(x as u32),
             _ => Err(self.err(v, key, &format!("an integer from {lo} to {hi}"))),
@@ -189,7 +251,9 @@ impl<'a> Reader<'a> {
     }
 
     fn boolean(&mut self, key: &str, default: bool) -> Result<bool> {
-        let Some(v) = self.get(key) else { return Ok(default) };
+        let Some(v) = self.get(key) else {
+            return Ok(default);
+        };
         match v.item {
             Item::Bool(b) => Ok(b),
             _ => Err(self.err(v, key, "`true` or `false`")),
@@ -197,7 +261,9 @@ impl<'a> Reader<'a> {
     }
 
     fn vec3_opt(&mut self, key: &str) -> Result<Option<Vec3>> {
-        let Some(v) = self.get(key) else { return Ok(None) };
+        let Some(v) = self.get(key) else {
+            return Ok(None);
+        };
         if let Item::Array(items) = &v.item {
             if items.len() == 3 {
                 let mut out = [0.0; 3];
@@ -227,7 +293,9 @@ impl<'a> Reader<'a> {
     }
 
     fn string(&mut self, key: &str) -> Result<Option<(&'a str, &'a Located)>> {
-        let Some(v) = self.get(key) else { return Ok(None) };
+        let Some(v) = self.get(key) else {
+            return Ok(None);
+        };
         match &v.item {
             Item::Str(s, _) => Ok(Some((s.as_str(), v))),
             _ => Err(self.err(v, key, "a string")),
@@ -235,7 +303,9 @@ impl<'a> Reader<'a> {
     }
 
     fn choice<T: Copy>(&mut self, key: &str, options: &[(&str, T)], default: T) -> Result<T> {
-        let Some((s, v)) = self.string(key)? else { return Ok(default) };
+        let Some((s, v)) = self.string(key)? else {
+            return Ok(default);
+        };
         if let Some((_, t)) = options.iter().find(|(n, _)| *n == s) {
             return Ok(*t);
         }
@@ -246,7 +316,11 @@ impl<'a> Reader<'a> {
         }
         Err(self.src.error(
             v.origin,
-            format!("`{}.{key}`: expected one of {}, found \"{s}\"", self.ctx, names.join(", ")),
+            format!(
+                "`{}.{key}`: expected one of {}, found \"{s}\"",
+                self.ctx,
+                names.join(", ")
+            ),
             Some("unknown choice"),
             &notes,
         ))
@@ -260,7 +334,12 @@ impl<'a> Reader<'a> {
                 if let Some(s) = suggest(&e.key, known.iter().copied()) {
                     notes.insert(0, format!("did you mean `{s}`?"));
                 }
-                return Err(self.src.error(e.key_origin, format!("unknown key `{}` in `{}`", e.key, self.ctx), Some("unknown key"), &notes));
+                return Err(self.src.error(
+                    e.key_origin,
+                    format!("unknown key `{}` in `{}`", e.key, self.ctx),
+                    Some("unknown key"),
+                    &notes,
+                ));
             }
         }
         let _ = self.origin;
@@ -299,17 +378,41 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
             let position = r.vec3("position", [0.0, 0.0, 5.0])?;
             let target = r.vec3("target", [0.0, 0.0, 0.0])?;
             let up = r.vec3("up", [0.0, 1.0, 0.0])?;
-            let fov = r.num_in("fov", 40.0, |x| x > 0.0 && x < 180.0, "a vertical field of view in degrees, between 0 and 180")?;
-            let check_origin = r.get("target").or(r.get("position")).map(|l| l.origin).unwrap_or(v.origin);
+            let fov = r.num_in(
+                "fov",
+                40.0,
+                |x| x > 0.0 && x < 180.0,
+                "a vertical field of view in degrees, between 0 and 180",
+            )?;
+            let check_origin = r
+                .get("target")
+                .or(r.get("position"))
+                .map(|l| l.origin)
+                .unwrap_or(v.origin);
             r.finish(&["position", "target", "up", "fov"])?;
             let fwd = sub(target, position);
             if norm(fwd) < 1e-12 {
-                return Err(src.error(check_origin, "camera `target` equals `position`: the camera has no direction", Some("move the target away from the position"), &[]));
+                return Err(src.error(
+                    check_origin,
+                    "camera `target` equals `position`: the camera has no direction",
+                    Some("move the target away from the position"),
+                    &[],
+                ));
             }
             if norm(cross(fwd, up)) < 1e-9 * norm(fwd) * norm(up).max(1e-300) {
-                return Err(src.error(check_origin, "camera `up` is parallel to the viewing direction (or zero)", Some("choose an `up` that is not along target − position"), &[]));
+                return Err(src.error(
+                    check_origin,
+                    "camera `up` is parallel to the viewing direction (or zero)",
+                    Some("choose an `up` that is not along target − position"),
+                    &[],
+                ));
             }
-            Camera { position, target, up, fov }
+            Camera {
+                position,
+                target,
+                up,
+                fov,
+            }
         }
         None => Camera {
             position: [0.0, 0.0, 5.0],
@@ -332,7 +435,12 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 hit_epsilon: r.positive("hit_epsilon", d.hit_epsilon)?,
                 relative_epsilon: r.boolean("relative_epsilon", d.relative_epsilon)?,
                 max_distance: r.positive("max_distance", d.max_distance)?,
-                step_scale: r.num_in("step_scale", d.step_scale, |x| x > 0.0 && x <= 2.0, "a step scale in (0, 2]")?,
+                step_scale: r.num_in(
+                    "step_scale",
+                    d.step_scale,
+                    |x| x > 0.0 && x <= 2.0,
+                    "a step scale in (0, 2]",
+                )?,
                 normals: r.choice(
                     "normals",
                     &[
@@ -364,7 +472,15 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 ao_intensity: r.non_negative("ao_intensity", d.ao_intensity)?,
                 background: r.color("background", d.background)?,
                 blend: r.non_negative("blend", d.blend)?,
-                view: r.choice("view", &[("shaded", View::Shaded), ("steps", View::Steps), ("normals", View::Normals)], d.view)?,
+                view: r.choice(
+                    "view",
+                    &[
+                        ("shaded", View::Shaded),
+                        ("steps", View::Steps),
+                        ("normals", View::Normals),
+                    ],
+                    d.view,
+                )?,
             };
             r.finish(RENDER_KEYS)?;
             s
@@ -378,7 +494,17 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         let items: Vec<&Located> = match &v.item {
             Item::Array(items) => items.iter().collect(),
             Item::Table(_) => vec![v],
-            other => return Err(src.error(v.origin, format!("`light` must be an array of tables ([[light]]), found {}", other.type_name()), None, &[])),
+            other => {
+                return Err(src.error(
+                    v.origin,
+                    format!(
+                        "`light` must be an array of tables ([[light]]), found {}",
+                        other.type_name()
+                    ),
+                    None,
+                    &[],
+                ))
+            }
         };
         for (i, lv) in items.into_iter().enumerate() {
             let mut r = Reader::new(src, lv, &format!("light.{i}"))?;
@@ -387,12 +513,24 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 let dir = r.vec3("direction", [-1.0, 2.0, 1.0])?;
                 if norm(dir) < 1e-12 {
                     let o = r.get("direction").map(|l| l.origin).unwrap_or(lv.origin);
-                    return Err(src.error(o, format!("`light.{i}.direction` must not be zero"), Some("expected a direction towards the light"), &[]));
+                    return Err(src.error(
+                        o,
+                        format!("`light.{i}.direction` must not be zero"),
+                        Some("expected a direction towards the light"),
+                        &[],
+                    ));
                 }
-                LightKind::Directional { direction: normalize(dir) }
+                LightKind::Directional {
+                    direction: normalize(dir),
+                }
             } else {
                 let Some(position) = r.vec3_opt("position")? else {
-                    return Err(src.error(lv.origin, format!("point light `light.{i}` needs a `position`"), Some("add position = [x, y, z]"), &[]));
+                    return Err(src.error(
+                        lv.origin,
+                        format!("point light `light.{i}` needs a `position`"),
+                        Some("add position = [x, y, z]"),
+                        &[],
+                    ));
                 };
                 LightKind::Point { position }
             };
@@ -403,7 +541,15 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 size: r.positive("size", 0.1)?,
                 attenuation: r.color("attenuation", [1.0, 0.0, 0.0])?,
             };
-            r.finish(&["kind", "direction", "position", "color", "intensity", "size", "attenuation"])?;
+            r.finish(&[
+                "kind",
+                "direction",
+                "position",
+                "color",
+                "intensity",
+                "size",
+                "attenuation",
+            ])?;
             lights.push(light);
         }
     }
@@ -412,7 +558,12 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
     let mut materials = vec![Material::default_named("default")];
     if let Some(v) = top.get("material") {
         let Item::Table(entries) = &v.item else {
-            return Err(src.error(v.origin, "`material` must be a table of named materials ([material.NAME])", None, &[]));
+            return Err(src.error(
+                v.origin,
+                "`material` must be a table of named materials ([material.NAME])",
+                None,
+                &[],
+            ));
         };
         for e in entries {
             let mut r = Reader::new(src, &e.value, &format!("material.{}", e.key))?;
@@ -424,10 +575,32 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 specular: r.color("specular", d.specular)?,
                 shininess: r.positive("shininess", d.shininess)?,
                 emission: r.color("emission", d.emission)?,
-                model: r.choice("model", &[("phong", ShadingModel::Phong), ("blinn-phong", ShadingModel::BlinnPhong)], d.model)?,
-                specular_function: r.choice("specular_function", &[("pow", SpecularFunction::Pow), ("schlick", SpecularFunction::Schlick)], d.specular_function)?,
+                model: r.choice(
+                    "model",
+                    &[
+                        ("phong", ShadingModel::Phong),
+                        ("blinn-phong", ShadingModel::BlinnPhong),
+                    ],
+                    d.model,
+                )?,
+                specular_function: r.choice(
+                    "specular_function",
+                    &[
+                        ("pow", SpecularFunction::Pow),
+                        ("schlick", SpecularFunction::Schlick),
+                    ],
+                    d.specular_function,
+                )?,
             };
-            r.finish(&["ambient", "diffuse", "specular", "shininess", "emission", "model", "specular_function"])?;
+            r.finish(&[
+                "ambient",
+                "diffuse",
+                "specular",
+                "shininess",
+                "emission",
+                "model",
+                "specular_function",
+            ])?;
             if let Some(slot) = materials.iter_mut().find(|x| x.name == m.name) {
                 *slot = m;
             } else {
@@ -442,7 +615,11 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         let Some((loc, map)) = snips.get(d.source) else {
             return src.error(Origin::Implicit, d.message.clone(), None, &d.notes);
         };
-        let at = |i: usize| map.get(i).copied().unwrap_or_else(|| map.last().copied().unwrap_or(0));
+        let at = |i: usize| {
+            map.get(i)
+                .copied()
+                .unwrap_or_else(|| map.last().copied().unwrap_or(0))
+        };
         match loc.origin {
             Origin::File(_) => {
                 let span = Span::new(at(d.span.start), at(d.span.end.max(d.span.start)));
@@ -461,7 +638,12 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
     let mut params = Vec::new();
     if let Some(v) = top.get("params") {
         let Item::Table(entries) = &v.item else {
-            return Err(src.error(v.origin, "`params` must be a table of named numbers or vectors", None, &[]));
+            return Err(src.error(
+                v.origin,
+                "`params` must be a table of named numbers or vectors",
+                None,
+                &[],
+            ));
         };
         for e in entries {
             let val = param_value(src, &e.value, &format!("params.{}", e.key))?;
@@ -474,23 +656,41 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
     // [surface.NAME]
     if let Some(v) = top.get("surface") {
         let Item::Table(entries) = &v.item else {
-            return Err(src.error(v.origin, "`surface` must be a table of named surfaces ([surface.NAME])", None, &[]));
+            return Err(src.error(
+                v.origin,
+                "`surface` must be a table of named surfaces ([surface.NAME])",
+                None,
+                &[],
+            ));
         };
         for e in entries {
             let ctx = format!("surface.{}", e.key);
             check_name(src, &e.key, e.key_origin)?;
             if isoray_shape::library::is_function(&e.key) {
-                return Err(src.error(e.key_origin, format!("surface name `{}` is already a built-in function", e.key), Some("choose another name"), &[]));
+                return Err(src.error(
+                    e.key_origin,
+                    format!("surface name `{}` is already a built-in function", e.key),
+                    Some("choose another name"),
+                    &[],
+                ));
             }
             let mut r = Reader::new(src, &e.value, &ctx)?;
             let mut sparams = Vec::new();
             if let Some(pv) = r.get("params") {
                 let Item::Table(pe) = &pv.item else {
-                    return Err(src.error(pv.origin, format!("`{ctx}.params` must be a table such as {{ R = 1.0, r = 0.25 }}"), None, &[]));
+                    return Err(src.error(
+                        pv.origin,
+                        format!("`{ctx}.params` must be a table such as {{ R = 1.0, r = 0.25 }}"),
+                        None,
+                        &[],
+                    ));
                 };
                 for p in pe {
                     check_name(src, &p.key, p.key_origin)?;
-                    sparams.push((p.key.clone(), param_value(src, &p.value, &format!("{ctx}.params.{}", p.key))?));
+                    sparams.push((
+                        p.key.clone(),
+                        param_value(src, &p.value, &format!("{ctx}.params.{}", p.key))?,
+                    ));
                 }
             }
             for other in ["implicit", "parametric"] {
@@ -499,13 +699,21 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 }
             }
             let Some((text, loc)) = r.string("sdf")? else {
-                return Err(src.error(e.value.origin, format!("`{ctx}` needs an `sdf` expression"), Some("add sdf = \"...\""), &[]));
+                return Err(src.error(
+                    e.value.origin,
+                    format!("`{ctx}` needs an `sdf` expression"),
+                    Some("add sdf = \"...\""),
+                    &[],
+                ));
             };
             r.finish(&["params", "sdf"])?;
-            let Item::Str(_, map) = &loc.item else { unreachable!() };
+            let Item::Str(_, map) = &loc.item else {
+                unreachable!()
+            };
             let id = snippets.len();
             snippets.push((loc, map));
-            lib.add_surface(&e.key, sparams, text, id).map_err(|d| shape_error(&snippets, d))?;
+            lib.add_surface(&e.key, sparams, text, id)
+                .map_err(|d| shape_error(&snippets, d))?;
         }
     }
     lib.check().map_err(|d| shape_error(&snippets, d))?;
@@ -519,7 +727,17 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         Some(v) => {
             let items: Vec<&Located> = match &v.item {
                 Item::Array(items) => items.iter().collect(),
-                other => return Err(src.error(v.origin, format!("`object` must be an array of tables ([[object]]), found {}", other.type_name()), None, &[])),
+                other => {
+                    return Err(src.error(
+                        v.origin,
+                        format!(
+                            "`object` must be an array of tables ([[object]]), found {}",
+                            other.type_name()
+                        ),
+                        None,
+                        &[],
+                    ))
+                }
             };
             for (i, ov) in items.into_iter().enumerate() {
                 let mut r = Reader::new(src, ov, &format!("object.{i}"))?;
@@ -529,23 +747,39 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     Some((m, loc)) => match materials.iter().position(|x| x.name == m) {
                         Some(k) => k,
                         None => {
-                            let names: Vec<&str> = materials.iter().map(|x| x.name.as_str()).collect();
-                            let mut notes = vec![format!("defined materials: {}", names.join(", "))];
+                            let names: Vec<&str> =
+                                materials.iter().map(|x| x.name.as_str()).collect();
+                            let mut notes =
+                                vec![format!("defined materials: {}", names.join(", "))];
                             if let Some(s) = suggest(m, names.iter().copied()) {
                                 notes.insert(0, format!("did you mean \"{s}\"?"));
                             }
-                            return Err(src.error(loc.origin, format!("`object.{i}.material`: no material named \"{m}\""), Some("unknown material"), &notes));
+                            return Err(src.error(
+                                loc.origin,
+                                format!("`object.{i}.material`: no material named \"{m}\""),
+                                Some("unknown material"),
+                                &notes,
+                            ));
                         }
                     },
                 };
                 let Some((text, loc)) = r.string("shape")? else {
-                    return Err(src.error(ov.origin, format!("`object.{i}` needs a `shape`"), Some("add shape = \"sphere(p, 1.0)\""), &[]));
+                    return Err(src.error(
+                        ov.origin,
+                        format!("`object.{i}` needs a `shape`"),
+                        Some("add shape = \"sphere(p, 1.0)\""),
+                        &[],
+                    ));
                 };
                 r.finish(&["name", "material", "shape"])?;
-                let Item::Str(_, map) = &loc.item else { unreachable!() };
+                let Item::Str(_, map) = &loc.item else {
+                    unreachable!()
+                };
                 let id = snippets.len();
                 snippets.push((loc, map));
-                let node = lib.compile(&mut builder, text, id).map_err(|d| shape_error(&snippets, d))?;
+                let node = lib
+                    .compile(&mut builder, text, id)
+                    .map_err(|d| shape_error(&snippets, d))?;
                 nodes.push(node);
                 objects.push(Object {
                     name,
@@ -558,7 +792,12 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
     }
     top.finish(TOP_KEYS)?;
     if objects.is_empty() {
-        return Err(src.error(Origin::Implicit, "the scene has no objects", None, &["add at least one [[object]] with a `shape`".into()]));
+        return Err(src.error(
+            Origin::Implicit,
+            "the scene has no objects",
+            None,
+            &["add at least one [[object]] with a `shape`".into()],
+        ));
     }
 
     // The scene's distance: union, or smooth union with k = blend, folded in file order.
@@ -605,7 +844,12 @@ pub const RENDER_KEYS: &[&str] = &[
 ];
 
 /// min(a,b) − max(k−|a−b|,0)²/(4k), or min(a, b) when k = 0.
-fn smooth_union(b: &mut Builder, x: isoray_shape::Node, y: isoray_shape::Node, k: f64) -> isoray_shape::Node {
+fn smooth_union(
+    b: &mut Builder,
+    x: isoray_shape::Node,
+    y: isoray_shape::Node,
+    k: f64,
+) -> isoray_shape::Node {
     if k <= 0.0 {
         return b.min(x, y);
     }
@@ -622,15 +866,34 @@ fn smooth_union(b: &mut Builder, x: isoray_shape::Node, y: isoray_shape::Node, k
 }
 
 fn check_name(src: &Sources, name: &str, origin: Origin) -> Result<()> {
-    let ok = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_') && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+    let ok = name
+        .chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
     if !ok || isoray_shape::syntax::KEYWORDS.contains(&name) || name == "p" {
-        return Err(src.error(origin, format!("`{name}` cannot be used as a name in shape text"), Some("expected letters, digits and `_`, not a keyword or `p`"), &[]));
+        return Err(src.error(
+            origin,
+            format!("`{name}` cannot be used as a name in shape text"),
+            Some("expected letters, digits and `_`, not a keyword or `p`"),
+            &[],
+        ));
     }
     Ok(())
 }
 
 fn param_value(src: &Sources, v: &Located, ctx: &str) -> Result<Value> {
-    let bad = || src.error(v.origin, format!("`{ctx}`: expected a number or an array of 2 or 3 numbers, found {}", describe(&v.item)), Some("expected a number or vector"), &[]);
+    let bad = || {
+        src.error(
+            v.origin,
+            format!(
+                "`{ctx}`: expected a number or an array of 2 or 3 numbers, found {}",
+                describe(&v.item)
+            ),
+            Some("expected a number or vector"),
+            &[],
+        )
+    };
     match &v.item {
         Item::Num(x, _) if x.is_finite() => Ok(Value::Float(*x)),
         Item::Array(items) => {
@@ -655,7 +918,11 @@ fn sub(a: Vec3, b: Vec3) -> Vec3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 fn norm(a: Vec3) -> f64 {
     (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()

@@ -19,7 +19,10 @@ fn toml_syntax_error_is_located() {
 fn wrong_type_names_key_line_and_expectation() {
     let e = err(&format!("[render]\nwidth = \"wide\"\n{OK}"));
     assert_eq!((e.line, e.column), (Some(2), Some(9)), "{e}");
-    assert!(e.message.contains("render.width") && e.message.contains("integer"), "{e}");
+    assert!(
+        e.message.contains("render.width") && e.message.contains("integer"),
+        "{e}"
+    );
     let e = err(&format!("[camera]\nposition = [1.0, 2.0]\n{OK}"));
     assert!(e.message.contains("array of 3 numbers"), "{e}");
     let e = err(&format!("[render]\nshadows = \"sofft\"\n{OK}"));
@@ -43,10 +46,18 @@ fn shape_errors_point_into_the_toml_string() {
     // The caret starts at `p + vec2(...)`, column 17 of line 2.
     assert_eq!(e.column, Some(17), "{e}");
     assert!(e.message.contains("cannot add `vec3` and `vec2`"), "{e}");
-    assert!(e.rendered.contains(&format!("{} vec3 + vec2", "^".repeat(18))), "{e}");
+    assert!(
+        e.rendered
+            .contains(&format!("{} vec3 + vec2", "^".repeat(18))),
+        "{e}"
+    );
 
     let e = err("[[object]]\nshape = \"sphre(p, 1.0)\"\n");
-    assert!(e.message.contains("unknown function `sphre`") && e.rendered.contains("did you mean `sphere`?"), "{e}");
+    assert!(
+        e.message.contains("unknown function `sphre`")
+            && e.rendered.contains("did you mean `sphere`?"),
+        "{e}"
+    );
     let e = err("[[object]]\nshape = \"sphere(p, 1.0, 2.0)\"\n");
     assert!(e.message.contains("takes 2 argument(s), found 3"), "{e}");
     let e = err("[[object]]\nshape = '''\nlet r = 1.0;\nsphere(p, q)'''\n");
@@ -61,15 +72,24 @@ fn surface_errors_and_user_primitives() {
     assert!((s.distance([2.25, 0.0, 0.0])).abs() < 1e-12);
     let e = err("[surface.ring]\nsdf = \"length(p.xw)\"\n[[object]]\nshape = \"ring(p)\"\n");
     assert_eq!(e.line, Some(2));
-    assert!(e.message.contains("`.w`") || e.message.contains("component"), "{e}");
-    let e = err("[surface.a]\nsdf = \"b(p)\"\n[surface.b]\nsdf = \"a(p)\"\n[[object]]\nshape = \"a(p)\"\n");
+    assert!(
+        e.message.contains("`.w`") || e.message.contains("component"),
+        "{e}"
+    );
+    let e = err(
+        "[surface.a]\nsdf = \"b(p)\"\n[surface.b]\nsdf = \"a(p)\"\n[[object]]\nshape = \"a(p)\"\n",
+    );
     assert!(e.message.contains("calls itself"), "{e}");
 }
 
 #[test]
 fn semantic_errors() {
     let e = err("[[object]]\nmaterial = \"gld\"\nshape = \"sphere(p, 1.0)\"\n[material.gold]\n");
-    assert!(e.message.contains("no material named \"gld\"") && e.rendered.contains("did you mean \"gold\"?"), "{e}");
+    assert!(
+        e.message.contains("no material named \"gld\"")
+            && e.rendered.contains("did you mean \"gold\"?"),
+        "{e}"
+    );
     let e = err("[camera]\nposition = [0.0, 0.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
     assert!(e.message.contains("no direction"), "{e}");
     let e = err("[render]\nwidth = 10\n");
@@ -81,11 +101,28 @@ fn semantic_errors() {
 #[test]
 fn overrides() {
     let text = "[render]\nshadows = \"soft\"\n[[light]]\nintensity = 1.0\n[[object]]\nshape = \"sphere(p, 1.0)\"\n";
-    let s = load_str(text, "s.toml", &["render.shadows=hard".into(), "light.0.intensity=2".into(), "render.aa=3".into()]).unwrap();
+    let s = load_str(
+        text,
+        "s.toml",
+        &[
+            "render.shadows=hard".into(),
+            "light.0.intensity=2".into(),
+            "render.aa=3".into(),
+        ],
+    )
+    .unwrap();
     assert_eq!(s.render.shadows, ShadowMode::Hard);
     assert_eq!(s.lights[0].intensity, 2.0);
     assert_eq!(s.render.aa, 3);
-    let s = load_str(text, "s.toml", &["object.0.shape=sphere(p, 2.0)".into(), "params.k=0.5".into()]).unwrap();
+    let s = load_str(
+        text,
+        "s.toml",
+        &[
+            "object.0.shape=sphere(p, 2.0)".into(),
+            "params.k=0.5".into(),
+        ],
+    )
+    .unwrap();
     assert!((s.distance([3.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
     for (ov, want) in [
         ("light.5.intensity=2", "out of range"),
@@ -122,11 +159,28 @@ fn examples_load() {
 #[test]
 fn garbage_never_panics() {
     let samples = [
-        "", "[", "]]", "a = ", "[[object]]", "[[object]]\nshape = 3", "[[object]]\nshape = \"\"", "[[object]]\nshape = \"((((\"",
-        "[camera]\nfov = -1\n", "[render]\naa = 0\n", "[render]\nbackground = [1, -1, 0]\n", "[light]\nkind = 3\n",
-        "object = 5", "[material]\nx = 1\n", "[params]\np = 1\n", "[surface.x]\nparams = 3\n", "[[object]]\nshape = \"sphere(p, 1.0)\"\n[params]\nk = [1]\n",
+        "",
+        "[",
+        "]]",
+        "a = ",
+        "[[object]]",
+        "[[object]]\nshape = 3",
+        "[[object]]\nshape = \"\"",
+        "[[object]]\nshape = \"((((\"",
+        "[camera]\nfov = -1\n",
+        "[render]\naa = 0\n",
+        "[render]\nbackground = [1, -1, 0]\n",
+        "[light]\nkind = 3\n",
+        "object = 5",
+        "[material]\nx = 1\n",
+        "[params]\np = 1\n",
+        "[surface.x]\nparams = 3\n",
+        "[[object]]\nshape = \"sphere(p, 1.0)\"\n[params]\nk = [1]\n",
     ];
     for s in samples {
-        assert!(load_str(s, "g.toml", &[]).is_err(), "{s:?} should be rejected");
+        assert!(
+            load_str(s, "g.toml", &[]).is_err(),
+            "{s:?} should be rejected"
+        );
     }
 }

@@ -168,7 +168,9 @@ pub fn edit_distance(a: &str, b: &str) -> usize {
                 i
             } else {
                 let cost = usize::from(a[i - 1] != b[j - 1]);
-                let mut v = (d[(i - 1) * w + j] + 1).min(d[i * w + j - 1] + 1).min(d[(i - 1) * w + j - 1] + cost);
+                let mut v = (d[(i - 1) * w + j] + 1)
+                    .min(d[i * w + j - 1] + 1)
+                    .min(d[(i - 1) * w + j - 1] + cost);
                 if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
                     v = v.min(d[(i - 2) * w + j - 2] + 1);
                 }
@@ -205,7 +207,14 @@ mod tests {
     fn caret_under_span() {
         let t = "x = 1\nshape = \"foo(p)\"\n";
         let start = t.find("foo").unwrap();
-        let r = render_snippet("s.toml", t, Span::new(start, start + 3), "unknown", Some("here"), &[]);
+        let r = render_snippet(
+            "s.toml",
+            t,
+            Span::new(start, start + 3),
+            "unknown",
+            Some("here"),
+            &[],
+        );
         assert!(r.contains("--> s.toml:2:10"), "{r}");
         assert!(r.contains("  |          ^^^ here"), "{r}");
     }

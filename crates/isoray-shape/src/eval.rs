@@ -176,7 +176,11 @@ impl Num for Dual {
                 }
             }
             BinOp::Pow => {
-                let ka = if b.v == 0.0 { 0.0 } else { b.v * a.v.powf(b.v - 1.0) };
+                let ka = if b.v == 0.0 {
+                    0.0
+                } else {
+                    b.v * a.v.powf(b.v - 1.0)
+                };
                 let kb = if a.v > 0.0 { v * a.v.ln() } else { 0.0 };
                 lin(ka, kb)
             }
@@ -219,9 +223,15 @@ impl<'t, T: Num> PointEvaluator<'t, T> {
         for ins in self.tape.instrs() {
             match *ins {
                 Instr::Unary { op, out, a } => s[out as usize] = T::unary(op, s[a as usize]),
-                Instr::Binary { op, out, a, b } => s[out as usize] = T::binary(op, s[a as usize], s[b as usize]),
+                Instr::Binary { op, out, a, b } => {
+                    s[out as usize] = T::binary(op, s[a as usize], s[b as usize])
+                }
                 Instr::Select { out, c, a, b } => {
-                    s[out as usize] = if s[c as usize].value() > 0.0 { s[a as usize] } else { s[b as usize] }
+                    s[out as usize] = if s[c as usize].value() > 0.0 {
+                        s[a as usize]
+                    } else {
+                        s[b as usize]
+                    }
                 }
             }
         }
@@ -243,7 +253,12 @@ pub enum GradientMode {
 }
 
 /// The four tetrahedron directions (±1, ±1, ±1) with an odd number of minus signs.
-pub const TETRAHEDRON: [[f64; 3]; 4] = [[1.0, -1.0, -1.0], [-1.0, -1.0, 1.0], [-1.0, 1.0, -1.0], [1.0, 1.0, 1.0]];
+pub const TETRAHEDRON: [[f64; 3]; 4] = [
+    [1.0, -1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [-1.0, 1.0, -1.0],
+    [1.0, 1.0, 1.0],
+];
 
 /// The offsets (relative to the point, in units of h) at which a finite
 /// difference mode samples, and the weights turning samples into ∂/∂x,y,z:
@@ -266,7 +281,10 @@ pub fn stencil(mode: GradientMode) -> Vec<([f64; 3], [f64; 3])> {
             ([0.0, 0.0, 1.0], [0.0, 0.0, 1.0]),
         ],
         // Σ_i k_i f(p + h k_i) = 4 h ∇f + O(h³), so the weights are k_i / 4.
-        GradientMode::Tetrahedron(_) => TETRAHEDRON.iter().map(|k| (*k, [k[0] * 0.25, k[1] * 0.25, k[2] * 0.25])).collect(),
+        GradientMode::Tetrahedron(_) => TETRAHEDRON
+            .iter()
+            .map(|k| (*k, [k[0] * 0.25, k[1] * 0.25, k[2] * 0.25]))
+            .collect(),
     }
 }
 
@@ -299,7 +317,17 @@ pub fn gradient(tape: &Tape, p: [f64; 3], mode: GradientMode) -> [f64; 3] {
 }
 
 /// Scalar types the batch evaluator runs on (f32 for rendering, f64 for precision).
-pub trait BatchNum: Num + Default + PartialOrd + std::ops::Add<Output = Self> + std::ops::Mul<Output = Self> + std::ops::Div<Output = Self> + Send + Sync {}
+pub trait BatchNum:
+    Num
+    + Default
+    + PartialOrd
+    + std::ops::Add<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + Send
+    + Sync
+{
+}
 impl BatchNum for f32 {}
 impl BatchNum for f64 {}
 
@@ -392,8 +420,23 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
     /// `gx, gy, gz`. `mode` chooses the stencil; for the finite-difference
     /// modes its step is in world units.
     #[allow(clippy::too_many_arguments)]
-    pub fn gradients(&mut self, xs: &[T], ys: &[T], zs: &[T], mode: GradientMode, gx: &mut [T], gy: &mut [T], gz: &mut [T]) {
-        let n = xs.len().min(ys.len()).min(zs.len()).min(gx.len()).min(gy.len()).min(gz.len());
+    pub fn gradients(
+        &mut self,
+        xs: &[T],
+        ys: &[T],
+        zs: &[T],
+        mode: GradientMode,
+        gx: &mut [T],
+        gy: &mut [T],
+        gz: &mut [T],
+    ) {
+        let n = xs
+            .len()
+            .min(ys.len())
+            .min(zs.len())
+            .min(gx.len())
+            .min(gy.len())
+            .min(gz.len());
         if mode == GradientMode::Dual {
             let mut e = PointEvaluator::<Dual>::new(self.tape);
             for i in 0..n {
@@ -421,7 +464,11 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
         }
         for (o, w) in stencil(mode) {
             let [sx, sy, sz, sf] = &mut scratch;
-            let (ox, oy, oz) = (T::from_f64(h * o[0]), T::from_f64(h * o[1]), T::from_f64(h * o[2]));
+            let (ox, oy, oz) = (
+                T::from_f64(h * o[0]),
+                T::from_f64(h * o[1]),
+                T::from_f64(h * o[2]),
+            );
             for i in 0..n {
                 sx[i] = xs[i] + ox;
                 sy[i] = ys[i] + oy;

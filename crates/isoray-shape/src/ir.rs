@@ -232,9 +232,13 @@ impl Builder {
         }
         match (op, self.op(a)) {
             (UnOp::Neg, Op::Unary(UnOp::Neg, inner)) => return inner,
-            (UnOp::Abs, Op::Unary(UnOp::Abs | UnOp::Square | UnOp::Sqrt | UnOp::Exp, _)) => return a,
+            (UnOp::Abs, Op::Unary(UnOp::Abs | UnOp::Square | UnOp::Sqrt | UnOp::Exp, _)) => {
+                return a
+            }
             (UnOp::Abs, Op::Unary(UnOp::Neg, inner)) => return self.unary(UnOp::Abs, inner),
-            (UnOp::Square, Op::Unary(UnOp::Neg | UnOp::Abs, inner)) => return self.unary(UnOp::Square, inner),
+            (UnOp::Square, Op::Unary(UnOp::Neg | UnOp::Abs, inner)) => {
+                return self.unary(UnOp::Square, inner)
+            }
             _ => {}
         }
         self.intern(Op::Unary(op, a))
@@ -293,7 +297,8 @@ impl Builder {
                 // Division by a constant power of two is exact as a multiplication.
                 if let Some(y) = cb {
                     let r = 1.0 / y;
-                    if y != 0.0 && r.is_finite() && (r * y == 1.0) && y.abs().log2().fract() == 0.0 {
+                    if y != 0.0 && r.is_finite() && (r * y == 1.0) && y.abs().log2().fract() == 0.0
+                    {
                         let rc = self.constant(r);
                         return self.binary(BinOp::Mul, a, rc);
                     }
@@ -514,7 +519,12 @@ impl Tape {
         }
         let mut free: Vec<u32> = Vec::new();
         let mut instrs = Vec::new();
-        let is_temp = |ops: &[Op], m: Node| matches!(ops[m.0 as usize], Op::Unary(..) | Op::Binary(..) | Op::Select(..));
+        let is_temp = |ops: &[Op], m: Node| {
+            matches!(
+                ops[m.0 as usize],
+                Op::Unary(..) | Op::Binary(..) | Op::Select(..)
+            )
+        };
         for i in 0..n {
             if !needed[i] || !is_temp(ops, Node(i as u32)) {
                 continue;
@@ -527,7 +537,15 @@ impl Tape {
             let s = |m: Node| slot_of[m.0 as usize];
             let (instr, operands): (Instr, Vec<Node>) = match ops[i] {
                 Op::Unary(op, a) => (Instr::Unary { op, out, a: s(a) }, vec![a]),
-                Op::Binary(op, a, b) => (Instr::Binary { op, out, a: s(a), b: s(b) }, vec![a, b]),
+                Op::Binary(op, a, b) => (
+                    Instr::Binary {
+                        op,
+                        out,
+                        a: s(a),
+                        b: s(b),
+                    },
+                    vec![a, b],
+                ),
                 Op::Select(c, a, b) => (
                     Instr::Select {
                         out,
@@ -620,7 +638,12 @@ mod tests {
         }
         let t = b.tape(acc);
         // Temporaries are reused: far fewer slots than instructions.
-        assert!(t.slots() < 3 + 1 + t.len() / 2, "{} slots for {} instructions", t.slots(), t.len());
+        assert!(
+            t.slots() < 3 + 1 + t.len() / 2,
+            "{} slots for {} instructions",
+            t.slots(),
+            t.len()
+        );
         for i in &t.instrs {
             match *i {
                 Instr::Unary { out, a, .. } => assert_ne!(out, a),

@@ -157,7 +157,9 @@ pub fn is_function(name: &str) -> bool {
 
 /// All callable names.
 pub fn function_names() -> impl Iterator<Item = &'static str> {
-    ["vec2", "vec3", "float"].into_iter().chain(FUNCTIONS.iter().map(|s| s.name))
+    ["vec2", "vec3", "float"]
+        .into_iter()
+        .chain(FUNCTIONS.iter().map(|s| s.name))
 }
 
 /// A signature as text, e.g. `sphere(p: vec3, r: float)`.
@@ -172,23 +174,41 @@ pub fn signature_text(s: &Signature) -> String {
                 P | V => "vec3",
                 G => "float|vec2|vec3",
             };
-            let opt = if i >= s.params.len() - s.optional { "?" } else { "" };
+            let opt = if i >= s.params.len() - s.optional {
+                "?"
+            } else {
+                ""
+            };
             format!("{n}{opt}: {t}")
         })
         .collect();
-    let variadic = if matches!(s.name, "union" | "intersection") { ", ..." } else { "" };
+    let variadic = if matches!(s.name, "union" | "intersection") {
+        ", ..."
+    } else {
+        ""
+    };
     format!("{}({}{variadic})", s.name, ps.join(", "))
 }
 
 /// Lowers a call of a built-in; `None` when `name` is not one.
-pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Option<Result<Val, Diagnostic>> {
+pub(crate) fn call(
+    l: &mut Lowerer,
+    name: &str,
+    span: Span,
+    args: &[Arg],
+) -> Option<Result<Val, Diagnostic>> {
     match name {
         "vec2" | "vec3" => return Some(construct(l, name, span, args)),
         "float" => {
             return Some(match args {
                 [a] if a.v.ty == Type::Float => Ok(a.v),
                 [a] => Ok(Val::float(a.v.c[0])),
-                _ => Err(l.err(span, format!("`float` takes 1 argument, found {}", args.len())).with_label("wrong number of arguments")),
+                _ => Err(l
+                    .err(
+                        span,
+                        format!("`float` takes 1 argument, found {}", args.len()),
+                    )
+                    .with_label("wrong number of arguments")),
             })
         }
         "union" | "intersection" if args.len() > 2 => {
@@ -196,13 +216,23 @@ pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Opt
             for a in args {
                 if a.v.ty != Type::Float {
                     return Some(Err(l
-                        .err(a.span, format!("`{name}` combines distances: expected `float`, found `{}`", a.v.ty))
+                        .err(
+                            a.span,
+                            format!(
+                                "`{name}` combines distances: expected `float`, found `{}`",
+                                a.v.ty
+                            ),
+                        )
                         .with_note(format!("signature: {}", signature_text(one)))));
                 }
             }
             let mut acc = args[0].v.s();
             for a in &args[1..] {
-                acc = if name == "union" { l.b.min(acc, a.v.s()) } else { l.b.max(acc, a.v.s()) };
+                acc = if name == "union" {
+                    l.b.min(acc, a.v.s())
+                } else {
+                    l.b.max(acc, a.v.s())
+                };
             }
             return Some(Ok(Val::float(acc)));
         }
@@ -212,7 +242,8 @@ pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Opt
     if sigs.is_empty() {
         return None;
     }
-    let fits = |s: &&&Signature| args.len() <= s.params.len() && args.len() + s.optional >= s.params.len();
+    let fits =
+        |s: &&&Signature| args.len() <= s.params.len() && args.len() + s.optional >= s.params.len();
     let Some(sig) = sigs.iter().find(fits) else {
         let all: Vec<String> = sigs.iter().map(|s| signature_text(s)).collect();
         let want = sigs
@@ -227,7 +258,10 @@ pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Opt
             .collect::<Vec<_>>()
             .join(" or ");
         return Some(Err(l
-            .err(span, format!("`{name}` takes {want} argument(s), found {}", args.len()))
+            .err(
+                span,
+                format!("`{name}` takes {want} argument(s), found {}", args.len()),
+            )
             .with_label("wrong number of arguments")
             .with_note(format!("signature: {}", all.join("  or  ")))));
     };
@@ -236,9 +270,15 @@ pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Opt
 
 fn check(l: &mut Lowerer, sig: &Signature, args: &[Arg]) -> Result<Vec<Val>, Diagnostic> {
     let mismatch = |l: &Lowerer, a: &Arg, pname: &str, want: &str| {
-        l.err(a.span, format!("argument `{pname}` of `{}` must be {want}, found `{}`", sig.name, a.v.ty))
-            .with_label(format!("expected {want}"))
-            .with_note(format!("signature: {}", signature_text(sig)))
+        l.err(
+            a.span,
+            format!(
+                "argument `{pname}` of `{}` must be {want}, found `{}`",
+                sig.name, a.v.ty
+            ),
+        )
+        .with_label(format!("expected {want}"))
+        .with_note(format!("signature: {}", signature_text(sig)))
     };
     let mut generic: Option<(Type, Span)> = None;
     let mut out = Vec::with_capacity(args.len());
@@ -246,9 +286,18 @@ fn check(l: &mut Lowerer, sig: &Signature, args: &[Arg]) -> Result<Vec<Val>, Dia
         let v = match kind {
             F if a.v.ty != Type::Float => return Err(mismatch(l, a, pname, "a `float`")),
             P if a.v.ty != Type::Vec3 => {
-                return Err(mismatch(l, a, pname, "a `vec3` point").with_note("primitives take the point first, e.g. `sphere(p - vec3(1.0, 0.0, 0.0), 0.5)`"))
+                return Err(mismatch(l, a, pname, "a `vec3` point").with_note(
+                    "primitives take the point first, e.g. `sphere(p - vec3(1.0, 0.0, 0.0), 0.5)`",
+                ))
             }
-            V if a.v.ty == Type::Vec2 => return Err(mismatch(l, a, pname, "a `vec3` (or a float, used for all three components)")),
+            V if a.v.ty == Type::Vec2 => {
+                return Err(mismatch(
+                    l,
+                    a,
+                    pname,
+                    "a `vec3` (or a float, used for all three components)",
+                ))
+            }
             V if a.v.ty == Type::Float => Val::vec3(a.v.s(), a.v.s(), a.v.s()),
             G if a.v.ty != Type::Float => {
                 if let Some((t, s)) = generic {
@@ -286,9 +335,17 @@ fn construct(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Result<Va
     }
     if comps.len() != want {
         return Err(l
-            .err(span, format!("`{name}` needs {want} components in total, found {}", comps.len()))
+            .err(
+                span,
+                format!(
+                    "`{name}` needs {want} components in total, found {}",
+                    comps.len()
+                ),
+            )
             .with_label("wrong number of components")
-            .with_note(format!("write `{name}(x)` to broadcast one float, or give {want} components")));
+            .with_note(format!(
+                "write `{name}(x)` to broadcast one float, or give {want} components"
+            )));
     }
     Ok(Val::from_slice(&comps).expect("2 or 3"))
 }
@@ -443,7 +500,11 @@ fn lower(l: &mut Lowerer, sig: &Signature, a: &[Val]) -> Val {
             f(l.b.max(a[0].s(), nb))
         }
         ("smooth_union" | "smooth_intersection" | "smooth_difference", _) => {
-            let n = if a.len() > 3 { a[3].s() } else { l.b.constant(2.0) };
+            let n = if a.len() > 3 {
+                a[3].s()
+            } else {
+                l.b.constant(2.0)
+            };
             let (x, mut y, k) = (a[0].s(), a[1].s(), a[2].s());
             if name == "smooth_difference" {
                 y = l.b.neg(y);
@@ -452,7 +513,14 @@ fn lower(l: &mut Lowerer, sig: &Signature, a: &[Val]) -> Val {
         }
         ("smin_cubic", _) => {
             let three = l.b.constant(3.0);
-            f(smooth_minmax(l.b, a[0].s(), a[1].s(), a[2].s(), three, true))
+            f(smooth_minmax(
+                l.b,
+                a[0].s(),
+                a[1].s(),
+                a[2].s(),
+                three,
+                true,
+            ))
         }
         ("smin_exp", _) => f(smin_exp(l.b, a[0].s(), a[1].s(), a[2].s())),
         ("smin_pow", _) => f(smin_pow(l.b, a[0].s(), a[1].s(), a[2].s())),

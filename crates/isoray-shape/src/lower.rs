@@ -57,7 +57,13 @@ impl Library {
 
     /// Parses and adds a user primitive. `source` identifies `text` in
     /// diagnostics. The body is type-checked by [`Library::check`].
-    pub fn add_surface(&mut self, name: &str, params: Vec<(String, Value)>, text: &str, source: SourceId) -> Result<(), Diagnostic> {
+    pub fn add_surface(
+        &mut self,
+        name: &str,
+        params: Vec<(String, Value)>,
+        text: &str,
+        source: SourceId,
+    ) -> Result<(), Diagnostic> {
         let program = parse(text, source)?;
         if !self.surfaces.contains_key(name) {
             self.order.push(name.to_string());
@@ -98,21 +104,40 @@ impl Library {
     }
 
     /// Compiles shape text to a DAG node in `b` (the signed distance at `p`).
-    pub fn compile(&self, b: &mut Builder, text: &str, source: SourceId) -> Result<Node, Diagnostic> {
+    pub fn compile(
+        &self,
+        b: &mut Builder,
+        text: &str,
+        source: SourceId,
+    ) -> Result<Node, Diagnostic> {
         let program = parse(text, source)?;
         self.compile_program(b, &program, source)
     }
 
     /// Compiles an already parsed program.
-    pub fn compile_program(&self, b: &mut Builder, program: &Program, source: SourceId) -> Result<Node, Diagnostic> {
+    pub fn compile_program(
+        &self,
+        b: &mut Builder,
+        program: &Program,
+        source: SourceId,
+    ) -> Result<Node, Diagnostic> {
         let mut l = Lowerer::new(b, self, source);
         let p = l.point();
         l.scope.push(("p".to_string(), p));
         let v = l.program(program)?;
         if v.ty != Type::Float {
-            return Err(Diagnostic::new(source, program.body.span, format!("a shape must be a `float` distance, but this is a `{}`", v.ty))
-                .with_label(format!("this is a {}", v.ty))
-                .with_note("call a primitive such as `sphere(p, 1.0)`, or take a component such as `.x`"));
+            return Err(Diagnostic::new(
+                source,
+                program.body.span,
+                format!(
+                    "a shape must be a `float` distance, but this is a `{}`",
+                    v.ty
+                ),
+            )
+            .with_label(format!("this is a {}", v.ty))
+            .with_note(
+                "call a primitive such as `sphere(p, 1.0)`, or take a component such as `.x`",
+            ));
         }
         Ok(v.s())
     }
@@ -168,7 +193,13 @@ impl<'a> Lowerer<'a> {
                 };
                 if want != v.ty {
                     return Err(self
-                        .err(l.value.span, format!("`{}` is declared `{}` but its value is a `{}`", l.name, want, v.ty))
+                        .err(
+                            l.value.span,
+                            format!(
+                                "`{}` is declared `{}` but its value is a `{}`",
+                                l.name, want, v.ty
+                            ),
+                        )
                         .with_label(format!("this is a {}", v.ty))
                         .with_note(format!("the declaration is at byte {}", span.start)));
                 }
@@ -181,7 +212,11 @@ impl<'a> Lowerer<'a> {
     }
 
     fn lookup(&self, name: &str) -> Option<Val> {
-        self.scope.iter().rev().find(|(n, _)| n == name).map(|(_, v)| *v)
+        self.scope
+            .iter()
+            .rev()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| *v)
     }
 
     pub(crate) fn expr(&mut self, e: &Expr) -> Result<Val, Diagnostic> {
@@ -199,11 +234,15 @@ impl<'a> Lowerer<'a> {
                 }
                 let mut known: Vec<&str> = self.scope.iter().map(|(n, _)| n.as_str()).collect();
                 known.extend(self.lib.params.iter().map(|(n, _)| n.as_str()));
-                let mut d = self.err(e.span, format!("unknown name `{name}`")).with_label("not a variable, parameter or binding in scope");
+                let mut d = self
+                    .err(e.span, format!("unknown name `{name}`"))
+                    .with_label("not a variable, parameter or binding in scope");
                 if let Some(s) = suggest(name, known) {
                     d = d.with_note(format!("did you mean `{s}`?"));
                 } else if library::is_function(name) || self.lib.surfaces.contains_key(name) {
-                    d = d.with_note(format!("`{name}` is a function: call it with arguments, like `{name}(p, ...)`"));
+                    d = d.with_note(format!(
+                        "`{name}` is a function: call it with arguments, like `{name}(p, ...)`"
+                    ));
                 }
                 Err(d)
             }
@@ -223,7 +262,9 @@ impl<'a> Lowerer<'a> {
                     return Err(self
                         .err(e.span, format!("cannot {verb} `{}` and `{}`", va.ty, vb.ty))
                         .with_label(format!("{} {} {}", va.ty, op.symbol(), vb.ty))
-                        .with_note("both sides must have the same type, or one side must be a float"));
+                        .with_note(
+                            "both sides must have the same type, or one side must be a float",
+                        ));
                 }
                 let f = match op {
                     BinaryOp::Add => Builder::add,
@@ -237,10 +278,17 @@ impl<'a> Lowerer<'a> {
                 let v = self.expr(a)?;
                 self.swizzle(v, comps, e.span)
             }
-            ExprKind::Call { name, name_span, args } => {
+            ExprKind::Call {
+                name,
+                name_span,
+                args,
+            } => {
                 let mut lowered = Vec::with_capacity(args.len());
                 for a in args {
-                    lowered.push(Arg { v: self.expr(a)?, span: a.span });
+                    lowered.push(Arg {
+                        v: self.expr(a)?,
+                        span: a.span,
+                    });
                 }
                 self.call(name, *name_span, e.span, &lowered)
             }
@@ -249,10 +297,20 @@ impl<'a> Lowerer<'a> {
 
     fn swizzle(&mut self, v: Val, comps: &str, span: Span) -> Result<Val, Diagnostic> {
         if v.ty == Type::Float {
-            return Err(self.err(span, format!("cannot take components `.{comps}` of a `float`")).with_label("a float has no components"));
+            return Err(self
+                .err(
+                    span,
+                    format!("cannot take components `.{comps}` of a `float`"),
+                )
+                .with_label("a float has no components"));
         }
         if comps.is_empty() || comps.len() > 3 {
-            return Err(self.err(span, format!("a swizzle takes 1 to 3 components, found `.{comps}`")).with_label("expected e.g. `.x`, `.xz` or `.zyx`"));
+            return Err(self
+                .err(
+                    span,
+                    format!("a swizzle takes 1 to 3 components, found `.{comps}`"),
+                )
+                .with_label("expected e.g. `.x`, `.xz` or `.zyx`"));
         }
         let mut out = Vec::new();
         for ch in comps.chars() {
@@ -262,7 +320,10 @@ impl<'a> Lowerer<'a> {
                 'z' | 'b' | 'p' => 2,
                 _ => {
                     return Err(self
-                        .err(span, format!("`{ch}` is not a component name in `.{comps}`"))
+                        .err(
+                            span,
+                            format!("`{ch}` is not a component name in `.{comps}`"),
+                        )
                         .with_label("components are x, y, z (or r, g, b)"))
                 }
             };
@@ -279,14 +340,19 @@ impl<'a> Lowerer<'a> {
     /// Applies `f` to each component.
     pub(crate) fn map1(&mut self, v: Val, f: impl Fn(&mut Builder, Node) -> Node) -> Val {
         let mut c = v.c;
-        for i in 0..v.ty.width() {
-            c[i] = f(self.b, v.c[i]);
+        for (ci, &vi) in c.iter_mut().zip(&v.c).take(v.ty.width()) {
+            *ci = f(self.b, vi);
         }
         Val { ty: v.ty, c }
     }
 
     /// Applies `f` componentwise; a float operand broadcasts.
-    pub(crate) fn map2(&mut self, a: Val, b: Val, f: impl Fn(&mut Builder, Node, Node) -> Node) -> Val {
+    pub(crate) fn map2(
+        &mut self,
+        a: Val,
+        b: Val,
+        f: impl Fn(&mut Builder, Node, Node) -> Node,
+    ) -> Val {
         let ty = if a.ty == Type::Float { b.ty } else { a.ty };
         let mut c = [a.c[0]; 3];
         for (i, ci) in c.iter_mut().enumerate().take(ty.width()) {
@@ -296,8 +362,17 @@ impl<'a> Lowerer<'a> {
     }
 
     /// Applies `f` componentwise over three operands with broadcasting.
-    pub(crate) fn map3(&mut self, a: Val, b: Val, c3: Val, f: impl Fn(&mut Builder, Node, Node, Node) -> Node) -> Val {
-        let ty = [a.ty, b.ty, c3.ty].into_iter().find(|t| *t != Type::Float).unwrap_or(Type::Float);
+    pub(crate) fn map3(
+        &mut self,
+        a: Val,
+        b: Val,
+        c3: Val,
+        f: impl Fn(&mut Builder, Node, Node, Node) -> Node,
+    ) -> Val {
+        let ty = [a.ty, b.ty, c3.ty]
+            .into_iter()
+            .find(|t| *t != Type::Float)
+            .unwrap_or(Type::Float);
         let mut c = [a.c[0]; 3];
         for (i, ci) in c.iter_mut().enumerate().take(ty.width()) {
             *ci = f(self.b, a.at(i), b.at(i), c3.at(i));
@@ -305,7 +380,13 @@ impl<'a> Lowerer<'a> {
         Val { ty, c }
     }
 
-    fn call(&mut self, name: &str, name_span: Span, span: Span, args: &[Arg]) -> Result<Val, Diagnostic> {
+    fn call(
+        &mut self,
+        name: &str,
+        name_span: Span,
+        span: Span,
+        args: &[Arg],
+    ) -> Result<Val, Diagnostic> {
         if let Some(s) = self.lib.surfaces.get(name) {
             return self.call_surface(s, name_span, span, args);
         }
@@ -314,27 +395,53 @@ impl<'a> Lowerer<'a> {
         }
         let mut names: Vec<&str> = library::function_names().collect();
         names.extend(self.lib.surfaces.keys().map(|s| s.as_str()));
-        let mut d = self.err(name_span, format!("unknown function `{name}`")).with_label("not a built-in, primitive, operator or surface");
+        let mut d = self
+            .err(name_span, format!("unknown function `{name}`"))
+            .with_label("not a built-in, primitive, operator or surface");
         if let Some(s) = suggest(name, names) {
             d = d.with_note(format!("did you mean `{s}`?"));
         }
         Err(d)
     }
 
-    fn call_surface(&mut self, s: &Surface, name_span: Span, span: Span, args: &[Arg]) -> Result<Val, Diagnostic> {
+    fn call_surface(
+        &mut self,
+        s: &Surface,
+        name_span: Span,
+        span: Span,
+        args: &[Arg],
+    ) -> Result<Val, Diagnostic> {
         let sig = std::iter::once("p: vec3".to_string())
-            .chain(s.params.iter().map(|(n, v)| format!("{n}: {} = {}", v.ty(), fmt_value(v))))
+            .chain(
+                s.params
+                    .iter()
+                    .map(|(n, v)| format!("{n}: {} = {}", v.ty(), fmt_value(v))),
+            )
             .collect::<Vec<_>>()
             .join(", ");
         if args.is_empty() || args.len() > s.params.len() + 1 {
             return Err(self
-                .err(span, format!("`{}` takes the point and up to {} parameter(s), found {} argument(s)", s.name, s.params.len(), args.len()))
+                .err(
+                    span,
+                    format!(
+                        "`{}` takes the point and up to {} parameter(s), found {} argument(s)",
+                        s.name,
+                        s.params.len(),
+                        args.len()
+                    ),
+                )
                 .with_label("wrong number of arguments")
                 .with_note(format!("signature: {}({sig})", s.name)));
         }
         if args[0].v.ty != Type::Vec3 {
             return Err(self
-                .err(args[0].span, format!("the first argument of `{}` is the point: expected `vec3`, found `{}`", s.name, args[0].v.ty))
+                .err(
+                    args[0].span,
+                    format!(
+                        "the first argument of `{}` is the point: expected `vec3`, found `{}`",
+                        s.name, args[0].v.ty
+                    ),
+                )
                 .with_label("expected vec3"));
         }
         let mut vals = Vec::new();
@@ -348,7 +455,13 @@ impl<'a> Lowerer<'a> {
                         Val::from_slice(&vec![a.v.s(); want.width()]).expect("width 1..=3")
                     } else {
                         return Err(self
-                            .err(a.span, format!("parameter `{pname}` of `{}` is a `{want}`, found `{}`", s.name, a.v.ty))
+                            .err(
+                                a.span,
+                                format!(
+                                    "parameter `{pname}` of `{}` is a `{want}`, found `{}`",
+                                    s.name, a.v.ty
+                                ),
+                            )
                             .with_label(format!("expected {want}"))
                             .with_note(format!("signature: {}({sig})", s.name)));
                     };
@@ -360,16 +473,27 @@ impl<'a> Lowerer<'a> {
         if self.calls.iter().any(|c| c == &s.name) {
             let chain = self.calls.join(" → ");
             return Err(self
-                .err(name_span, format!("surface `{}` calls itself ({chain} → {})", s.name, s.name))
+                .err(
+                    name_span,
+                    format!("surface `{}` calls itself ({chain} → {})", s.name, s.name),
+                )
                 .with_label("recursive call"));
         }
         if self.calls.len() >= MAX_INLINE_DEPTH {
-            return Err(self.err(name_span, "surfaces nested too deeply").with_label(format!("more than {MAX_INLINE_DEPTH} levels")));
+            return Err(self
+                .err(name_span, "surfaces nested too deeply")
+                .with_label(format!("more than {MAX_INLINE_DEPTH} levels")));
         }
         self.inline_surface(s, args[0].v, &vals, name_span)
     }
 
-    fn inline_surface(&mut self, s: &Surface, p: Val, params: &[Val], _span: Span) -> Result<Val, Diagnostic> {
+    fn inline_surface(
+        &mut self,
+        s: &Surface,
+        p: Val,
+        params: &[Val],
+        _span: Span,
+    ) -> Result<Val, Diagnostic> {
         let saved_scope = std::mem::take(&mut self.scope);
         let saved_source = self.source;
         self.source = s.source;
@@ -384,8 +508,15 @@ impl<'a> Lowerer<'a> {
         self.scope = saved_scope;
         let v = r?;
         if v.ty != Type::Float {
-            return Err(Diagnostic::new(s.source, s.program.body.span, format!("surface `{}` must give a `float` distance, found `{}`", s.name, v.ty))
-                .with_label(format!("this is a {}", v.ty)));
+            return Err(Diagnostic::new(
+                s.source,
+                s.program.body.span,
+                format!(
+                    "surface `{}` must give a `float` distance, found `{}`",
+                    s.name, v.ty
+                ),
+            )
+            .with_label(format!("this is a {}", v.ty)));
         }
         Ok(v)
     }

@@ -61,8 +61,12 @@ pub fn lex(text: &str, source: SourceId) -> Result<Vec<Token>, Diagnostic> {
             i += 2;
             loop {
                 if i + 1 >= bytes.len() {
-                    return Err(Diagnostic::new(source, Span::new(start, start + 2), "unterminated comment")
-                        .with_label("this `/*` is never closed with `*/`"));
+                    return Err(Diagnostic::new(
+                        source,
+                        Span::new(start, start + 2),
+                        "unterminated comment",
+                    )
+                    .with_label("this `/*` is never closed with `*/`"));
                 }
                 if bytes[i] == b'*' && bytes[i + 1] == b'/' {
                     i += 2;
@@ -73,7 +77,8 @@ pub fn lex(text: &str, source: SourceId) -> Result<Vec<Token>, Diagnostic> {
             continue;
         }
         let start = i;
-        if c.is_ascii_digit() || (c == b'.' && bytes.get(i + 1).is_some_and(|b| b.is_ascii_digit())) {
+        if c.is_ascii_digit() || (c == b'.' && bytes.get(i + 1).is_some_and(|b| b.is_ascii_digit()))
+        {
             while i < bytes.len() && (bytes[i].is_ascii_digit() || bytes[i] == b'.') {
                 i += 1;
             }
@@ -98,9 +103,13 @@ pub fn lex(text: &str, source: SourceId) -> Result<Vec<Token>, Diagnostic> {
             }
             let span = Span::new(start, i);
             let v: f64 = lit.parse().map_err(|_| {
-                Diagnostic::new(source, span, format!("malformed number `{lit}`")).with_label("expected a number like 1, 0.5 or 2.5e-3")
+                Diagnostic::new(source, span, format!("malformed number `{lit}`"))
+                    .with_label("expected a number like 1, 0.5 or 2.5e-3")
             })?;
-            out.push(Token { tok: Tok::Num(v), span });
+            out.push(Token {
+                tok: Tok::Num(v),
+                span,
+            });
             continue;
         }
         if c.is_ascii_alphabetic() || c == b'_' {
@@ -122,8 +131,12 @@ pub fn lex(text: &str, source: SourceId) -> Result<Vec<Token>, Diagnostic> {
             continue;
         }
         let ch = text[i..].chars().next().unwrap_or('?');
-        return Err(Diagnostic::new(source, Span::new(i, i + ch.len_utf8()), format!("unexpected character `{ch}`"))
-            .with_label("not part of the shape language"));
+        return Err(Diagnostic::new(
+            source,
+            Span::new(i, i + ch.len_utf8()),
+            format!("unexpected character `{ch}`"),
+        )
+        .with_label("not part of the shape language"));
     }
     out.push(Token {
         tok: Tok::Eof,
@@ -290,7 +303,10 @@ impl Parser<'_> {
             Ok(self.bump().span)
         } else {
             let found = describe(&self.peek().tok);
-            Err(self.err(format!("expected `{c}` {context}, found {found}"), format!("expected `{c}`")))
+            Err(self.err(
+                format!("expected `{c}` {context}, found {found}"),
+                format!("expected `{c}`"),
+            ))
         }
     }
     fn is_punct(&self, c: char) -> bool {
@@ -311,26 +327,49 @@ impl Parser<'_> {
                 None
             } else {
                 let t = self.bump();
-                let Tok::Ident(s) = &t.tok else { unreachable!() };
+                let Tok::Ident(s) = &t.tok else {
+                    unreachable!()
+                };
                 TypeName::from_ident(s).map(|ty| (ty, t.span))
             };
             let name_tok = self.bump();
             let Tok::Ident(name) = name_tok.tok else {
-                return Err(Diagnostic::new(self.source, name_tok.span, format!("expected a name after `let`, found {}", describe(&name_tok.tok)))
-                    .with_label("expected a name"));
+                return Err(Diagnostic::new(
+                    self.source,
+                    name_tok.span,
+                    format!(
+                        "expected a name after `let`, found {}",
+                        describe(&name_tok.tok)
+                    ),
+                )
+                .with_label("expected a name"));
             };
             if KEYWORDS.contains(&name.as_str()) || name == "p" {
-                return Err(Diagnostic::new(self.source, name_tok.span, format!("`{name}` is reserved and cannot be bound")).with_label("reserved name"));
+                return Err(Diagnostic::new(
+                    self.source,
+                    name_tok.span,
+                    format!("`{name}` is reserved and cannot be bound"),
+                )
+                .with_label("reserved name"));
             }
             let mut ty = ty;
             if is_let && self.is_punct(':') {
                 self.bump();
                 let t = self.bump();
                 match &t.tok {
-                    Tok::Ident(s) if TypeName::from_ident(s).is_some() => ty = TypeName::from_ident(s).map(|x| (x, t.span)),
+                    Tok::Ident(s) if TypeName::from_ident(s).is_some() => {
+                        ty = TypeName::from_ident(s).map(|x| (x, t.span))
+                    }
                     other => {
-                        return Err(Diagnostic::new(self.source, t.span, format!("expected a type (`float`, `vec2` or `vec3`), found {}", describe(other)))
-                            .with_label("expected a type"))
+                        return Err(Diagnostic::new(
+                            self.source,
+                            t.span,
+                            format!(
+                                "expected a type (`float`, `vec2` or `vec3`), found {}",
+                                describe(other)
+                            ),
+                        )
+                        .with_label("expected a type"))
                     }
                 }
             }
@@ -348,7 +387,10 @@ impl Parser<'_> {
             self.bump();
         }
         if self.peek().tok == Tok::Eof {
-            return Err(self.err("expected an expression, found end of input", "the shape needs a final expression giving the distance"));
+            return Err(self.err(
+                "expected an expression, found end of input",
+                "the shape needs a final expression giving the distance",
+            ));
         }
         let body = self.expr()?;
         if self.is_punct(';') {
@@ -356,7 +398,10 @@ impl Parser<'_> {
         }
         if self.peek().tok != Tok::Eof {
             let found = describe(&self.peek().tok);
-            return Err(self.err(format!("expected end of input after the expression, found {found}"), "unexpected text"));
+            return Err(self.err(
+                format!("expected end of input after the expression, found {found}"),
+                "unexpected text",
+            ));
         }
         Ok(Program { lets, body })
     }
@@ -364,7 +409,10 @@ impl Parser<'_> {
     fn expr(&mut self) -> Result<Expr, Diagnostic> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            return Err(self.err("expression nested too deeply", format!("more than {MAX_DEPTH} levels")));
+            return Err(self.err(
+                "expression nested too deeply",
+                format!("more than {MAX_DEPTH} levels"),
+            ));
         }
         let r = self.additive();
         self.depth -= 1;
@@ -412,13 +460,19 @@ impl Parser<'_> {
             let t = self.bump();
             self.depth += 1;
             if self.depth > MAX_DEPTH {
-                return Err(self.err("expression nested too deeply", format!("more than {MAX_DEPTH} levels")));
+                return Err(self.err(
+                    "expression nested too deeply",
+                    format!("more than {MAX_DEPTH} levels"),
+                ));
             }
             let inner = self.unary()?;
             self.depth -= 1;
             let span = t.span.to(inner.span);
             if t.tok == Tok::Punct('+') {
-                return Ok(Expr { kind: inner.kind, span });
+                return Ok(Expr {
+                    kind: inner.kind,
+                    span,
+                });
             }
             return Ok(Expr {
                 kind: ExprKind::Neg(Box::new(inner)),
@@ -442,8 +496,15 @@ impl Parser<'_> {
                     };
                 }
                 other => {
-                    return Err(Diagnostic::new(self.source, t.span, format!("expected a swizzle such as `.xz` after `.`, found {}", describe(&other)))
-                        .with_label("expected components"))
+                    return Err(Diagnostic::new(
+                        self.source,
+                        t.span,
+                        format!(
+                            "expected a swizzle such as `.xz` after `.`, found {}",
+                            describe(&other)
+                        ),
+                    )
+                    .with_label("expected components"))
                 }
             }
         }
@@ -453,7 +514,10 @@ impl Parser<'_> {
     fn primary(&mut self) -> Result<Expr, Diagnostic> {
         let t = self.bump();
         match t.tok {
-            Tok::Num(v) => Ok(Expr { kind: ExprKind::Num(v), span: t.span }),
+            Tok::Num(v) => Ok(Expr {
+                kind: ExprKind::Num(v),
+                span: t.span,
+            }),
             Tok::Ident(name) => {
                 if self.is_punct('(') {
                     self.bump();
@@ -468,7 +532,8 @@ impl Parser<'_> {
                             break;
                         }
                     }
-                    let close = self.expect_punct(')', &format!("to close the arguments of `{name}`"))?;
+                    let close =
+                        self.expect_punct(')', &format!("to close the arguments of `{name}`"))?;
                     Ok(Expr {
                         kind: ExprKind::Call {
                             name,
@@ -478,7 +543,10 @@ impl Parser<'_> {
                         span: t.span.to(close),
                     })
                 } else {
-                    Ok(Expr { kind: ExprKind::Var(name), span: t.span })
+                    Ok(Expr {
+                        kind: ExprKind::Var(name),
+                        span: t.span,
+                    })
                 }
             }
             Tok::Punct('(') => {
@@ -489,8 +557,12 @@ impl Parser<'_> {
                     span: t.span.to(close),
                 })
             }
-            other => Err(Diagnostic::new(self.source, t.span, format!("expected an expression, found {}", describe(&other)))
-                .with_label("expected a number, a name, a call or `(`")),
+            other => Err(Diagnostic::new(
+                self.source,
+                t.span,
+                format!("expected an expression, found {}", describe(&other)),
+            )
+            .with_label("expected a number, a name, a call or `(`")),
         }
     }
 }
@@ -503,14 +575,20 @@ mod tests {
     fn parses_precedence() {
         let p = parse("1 + 2 * 3", 0).unwrap();
         match p.body.kind {
-            ExprKind::Binary(BinaryOp::Add, _, r) => assert!(matches!(r.kind, ExprKind::Binary(BinaryOp::Mul, _, _))),
+            ExprKind::Binary(BinaryOp::Add, _, r) => {
+                assert!(matches!(r.kind, ExprKind::Binary(BinaryOp::Mul, _, _)))
+            }
             k => panic!("{k:?}"),
         }
     }
 
     #[test]
     fn parses_lets_and_swizzles() {
-        let p = parse("let q = p.xz; // comment\n vec2 r = q * 2.0; /* block */ length(r) - 1.0", 0).unwrap();
+        let p = parse(
+            "let q = p.xz; // comment\n vec2 r = q * 2.0; /* block */ length(r) - 1.0",
+            0,
+        )
+        .unwrap();
         assert_eq!(p.lets.len(), 2);
         assert_eq!(p.lets[1].ty.map(|t| t.0), Some(TypeName::Vec2));
     }
@@ -518,7 +596,16 @@ mod tests {
     #[test]
     fn numbers() {
         let toks = lex("1 .5 2.5e-3 1e2 3.0f", 0).unwrap();
-        let v: Vec<f64> = toks.iter().filter_map(|t| if let Tok::Num(v) = t.tok { Some(v) } else { None }).collect();
+        let v: Vec<f64> = toks
+            .iter()
+            .filter_map(|t| {
+                if let Tok::Num(v) = t.tok {
+                    Some(v)
+                } else {
+                    None
+                }
+            })
+            .collect();
         assert_eq!(v, vec![1.0, 0.5, 2.5e-3, 100.0, 3.0]);
     }
 

@@ -59,7 +59,10 @@ pub struct Val {
 impl Val {
     /// A float value.
     pub fn float(n: Node) -> Val {
-        Val { ty: Type::Float, c: [n, n, n] }
+        Val {
+            ty: Type::Float,
+            c: [n, n, n],
+        }
     }
     /// A vector from components (1 to 3).
     pub fn from_slice(cs: &[Node]) -> Option<Val> {
@@ -70,7 +73,10 @@ impl Val {
     }
     /// A vec3.
     pub fn vec3(x: Node, y: Node, z: Node) -> Val {
-        Val { ty: Type::Vec3, c: [x, y, z] }
+        Val {
+            ty: Type::Vec3,
+            c: [x, y, z],
+        }
     }
     /// The meaningful components.
     pub fn comps(&self) -> &[Node] {
@@ -116,7 +122,10 @@ impl Value {
             Value::Float(v) => Val::float(b.constant(v)),
             Value::Vec2([x, y]) => {
                 let (x, y) = (b.constant(x), b.constant(y));
-                Val { ty: Type::Vec2, c: [x, y, y] }
+                Val {
+                    ty: Type::Vec2,
+                    c: [x, y, y],
+                }
             }
             Value::Vec3([x, y, z]) => {
                 let (x, y, z) = (b.constant(x), b.constant(y), b.constant(z));

@@ -78,9 +78,15 @@ fn check(src: &str, reference: impl Fn(V) -> f64) {
     for p in points(2000) {
         let (got, want) = (shape.eval(p), reference(p));
         inside += usize::from(want < 0.0);
-        assert!((got - want).abs() <= 1e-9 * (1.0 + want.abs()), "{src} at {p:?}: got {got}, want {want}");
+        assert!(
+            (got - want).abs() <= 1e-9 * (1.0 + want.abs()),
+            "{src} at {p:?}: got {got}, want {want}"
+        );
     }
-    assert!(inside > 0, "{src}: no sample point fell inside; the test would not cover the interior");
+    assert!(
+        inside > 0,
+        "{src}: no sample point fell inside; the test would not cover the interior"
+    );
 }
 
 #[test]
@@ -90,9 +96,13 @@ fn sphere() {
 
 #[test]
 fn boxes() {
-    check("box(p, vec3(1.0, 0.5, 1.5))", |p| ref_box(p, [1.0, 0.5, 1.5]));
+    check("box(p, vec3(1.0, 0.5, 1.5))", |p| {
+        ref_box(p, [1.0, 0.5, 1.5])
+    });
     check("box(p, 1.0)", |p| ref_box(p, [1.0; 3]));
-    check("round_box(p, vec3(1.0, 0.8, 1.2), 0.3)", |p| ref_box(p, [0.7, 0.5, 0.9]) - 0.3);
+    check("round_box(p, vec3(1.0, 0.8, 1.2), 0.3)", |p| {
+        ref_box(p, [0.7, 0.5, 0.9]) - 0.3
+    });
     let b = compile(&Library::new(), "box(p, vec3(1.0))").unwrap();
     assert_eq!(b.eval([2.0, 0.0, 0.0]), 1.0);
     assert!((b.eval([2.0, 2.0, 2.0]) - 3f64.sqrt()).abs() < 1e-12);
@@ -105,7 +115,11 @@ fn plane_and_ellipsoid() {
     check("ellipsoid(p, vec3(1.0, 0.5, 1.5))", |p| {
         let r = [1.0, 0.5, 1.5];
         let k0 = len([p[0] / r[0], p[1] / r[1], p[2] / r[2]]);
-        let k1 = len([p[0] / (r[0] * r[0]), p[1] / (r[1] * r[1]), p[2] / (r[2] * r[2])]);
+        let k1 = len([
+            p[0] / (r[0] * r[0]),
+            p[1] / (r[1] * r[1]),
+            p[2] / (r[2] * r[2]),
+        ]);
         k0 * (k0 - 1.0) / k1
     });
     let e = compile(&Library::new(), "ellipsoid(p, vec3(1.0, 0.5, 1.5))").unwrap();
@@ -121,8 +135,12 @@ fn cylinder_capsule_torus() {
         let dy = p[1].abs() - 0.8;
         dx.max(dy).min(0.0) + len2(dx.max(0.0), dy.max(0.0))
     });
-    check("capsule(p, 1.2, 0.4)", |p| len([p[0], p[1] - clamp(p[1], -0.6, 0.6), p[2]]) - 0.4);
-    check("torus(p, 1.0, 0.3)", |p| len2(len2(p[0], p[2]) - 1.0, p[1]) - 0.3);
+    check("capsule(p, 1.2, 0.4)", |p| {
+        len([p[0], p[1] - clamp(p[1], -0.6, 0.6), p[2]]) - 0.4
+    });
+    check("torus(p, 1.0, 0.3)", |p| {
+        len2(len2(p[0], p[2]) - 1.0, p[1]) - 0.3
+    });
     let lib = Library::new();
     let c = compile(&lib, "cylinder(p, 1.0, 0.5)").unwrap();
     assert!((c.eval([0.0, 2.0, 0.0]) - 1.0).abs() < 1e-12);
@@ -165,7 +183,9 @@ fn hard_operators() {
     check(&format!("union({a}, {b})"), |p| fa(p).min(fb(p)));
     check(&format!("intersection({a}, {b})"), |p| fa(p).max(fb(p)));
     check(&format!("difference({a}, {b})"), |p| fa(p).max(-fb(p)));
-    check(&format!("union({a}, {b}, sphere(p, 0.2))"), |p| fa(p).min(fb(p)).min(len(p) - 0.2));
+    check(&format!("union({a}, {b}, sphere(p, 0.2))"), |p| {
+        fa(p).min(fb(p)).min(len(p) - 0.2)
+    });
     check(&format!("round({b}, 0.1)"), |p| fb(p) - 0.1);
     check(&format!("onion({a}, 0.1)"), |p| fa(p).abs() - 0.1);
 }
@@ -175,18 +195,30 @@ fn smooth_operators_match_their_formulas() {
     let fa = |p: V| len(p) - 1.0;
     let fb = |p: V| ref_box([p[0] - 0.8, p[1], p[2]], [0.5; 3]);
     let (a, b) = ("sphere(p, 1.0)", "box(p - vec3(0.8, 0.0, 0.0), vec3(0.5))");
-    let corr = |x: f64, y: f64, k: f64, n: f64| (k - (x - y).abs()).max(0.0).powf(n) / (2.0 * n * k.powf(n - 1.0));
+    let corr = |x: f64, y: f64, k: f64, n: f64| {
+        (k - (x - y).abs()).max(0.0).powf(n) / (2.0 * n * k.powf(n - 1.0))
+    };
     for (k, n) in [(0.3, 2.0), (0.5, 3.0), (0.2, 1.5)] {
-        check(&format!("smooth_union({a}, {b}, {k}, {n})"), |p| fa(p).min(fb(p)) - corr(fa(p), fb(p), k, n));
-        check(&format!("smooth_intersection({a}, {b}, {k}, {n})"), |p| fa(p).max(fb(p)) + corr(fa(p), fb(p), k, n));
-        check(&format!("smooth_difference({a}, {b}, {k}, {n})"), |p| fa(p).max(-fb(p)) + corr(fa(p), -fb(p), k, n));
+        check(&format!("smooth_union({a}, {b}, {k}, {n})"), |p| {
+            fa(p).min(fb(p)) - corr(fa(p), fb(p), k, n)
+        });
+        check(&format!("smooth_intersection({a}, {b}, {k}, {n})"), |p| {
+            fa(p).max(fb(p)) + corr(fa(p), fb(p), k, n)
+        });
+        check(&format!("smooth_difference({a}, {b}, {k}, {n})"), |p| {
+            fa(p).max(-fb(p)) + corr(fa(p), -fb(p), k, n)
+        });
     }
     check(&format!("smin_cubic({a}, {b}, 0.4)"), |p| {
         let h = (0.4 - (fa(p) - fb(p)).abs()).max(0.0) / 0.4;
         fa(p).min(fb(p)) - h * h * h * 0.4 / 6.0
     });
-    check(&format!("smin_exp({a}, {b}, 0.1)"), |p| -0.1 * ((-fa(p) / 0.1).exp() + (-fb(p) / 0.1).exp()).ln());
-    check(&format!("smin_root({a}, {b}, 0.3)"), |p| 0.5 * (fa(p) + fb(p) - ((fa(p) - fb(p)).powi(2) + 0.09).sqrt()));
+    check(&format!("smin_exp({a}, {b}, 0.1)"), |p| {
+        -0.1 * ((-fa(p) / 0.1).exp() + (-fb(p) / 0.1).exp()).ln()
+    });
+    check(&format!("smin_root({a}, {b}, 0.3)"), |p| {
+        0.5 * (fa(p) + fb(p) - ((fa(p) - fb(p)).powi(2) + 0.09).sqrt())
+    });
     check(&format!("smin_pow({a}, {b}, 8.0)"), |p| {
         let (x, y) = (fa(p), fb(p));
         if x.min(y) <= 0.0 {
@@ -203,19 +235,35 @@ fn smooth_identities() {
     for p in points(200) {
         for (k, n) in [(0.3, 2.0), (0.5, 3.0), (0.8, 4.0)] {
             // smooth_union(a, a, k) = a - k/(2n) for the polynomial family.
-            let s = compile(&lib, &format!("smooth_union(sphere(p, 1.0), sphere(p, 1.0), {k}, {n})")).unwrap();
+            let s = compile(
+                &lib,
+                &format!("smooth_union(sphere(p, 1.0), sphere(p, 1.0), {k}, {n})"),
+            )
+            .unwrap();
             let a = len(p) - 1.0;
             assert!((s.eval(p) - (a - k / (2.0 * n))).abs() < 1e-12);
         }
         // k = 0 gives the hard operators.
-        for (soft, hard) in [("smooth_union", "union"), ("smooth_intersection", "intersection"), ("smooth_difference", "difference")] {
+        for (soft, hard) in [
+            ("smooth_union", "union"),
+            ("smooth_intersection", "intersection"),
+            ("smooth_difference", "difference"),
+        ] {
             let args = "sphere(p, 1.0), box(p - vec3(0.5), vec3(0.6)), 0.0";
             let s = compile(&lib, &format!("{soft}({args})")).unwrap();
-            let h = compile(&lib, &format!("{hard}(sphere(p, 1.0), box(p - vec3(0.5), vec3(0.6)))")).unwrap();
+            let h = compile(
+                &lib,
+                &format!("{hard}(sphere(p, 1.0), box(p - vec3(0.5), vec3(0.6)))"),
+            )
+            .unwrap();
             assert_eq!(s.eval(p), h.eval(p));
         }
         // A non-constant k that evaluates to 0 also gives the hard operator, without NaN.
-        let s = compile(&lib, "smooth_union(sphere(p, 1.0), box(p, vec3(0.5)), p.x * 0.0)").unwrap();
+        let s = compile(
+            &lib,
+            "smooth_union(sphere(p, 1.0), box(p, vec3(0.5)), p.x * 0.0)",
+        )
+        .unwrap();
         let h = compile(&lib, "union(sphere(p, 1.0), box(p, vec3(0.5)))").unwrap();
         assert_eq!(s.eval(p), h.eval(p));
     }
@@ -230,7 +278,11 @@ fn domain_operators() {
     assert!((r.eval([0.0, 0.0, 2.0]) - 1.0).abs() < 1e-12);
     // rotate(p, axis, angle) agrees with rotate_x/y/z.
     for p in points(100) {
-        for (ax, f) in [("vec3(1.0, 0.0, 0.0)", "rotate_x"), ("vec3(0.0, 2.0, 0.0)", "rotate_y"), ("vec3(0.0, 0.0, 1.0)", "rotate_z")] {
+        for (ax, f) in [
+            ("vec3(1.0, 0.0, 0.0)", "rotate_x"),
+            ("vec3(0.0, 2.0, 0.0)", "rotate_y"),
+            ("vec3(0.0, 0.0, 1.0)", "rotate_z"),
+        ] {
             let a = s(&format!("box(rotate(p, {ax}, 0.7), vec3(1.0, 0.5, 0.25))"));
             let b = s(&format!("box({f}(p, 0.7), vec3(1.0, 0.5, 0.25))"));
             assert!((a.eval(p) - b.eval(p)).abs() < 1e-12);
@@ -257,14 +309,20 @@ fn domain_operators() {
     let tw = s("box(twist_y(p, 1.0), vec3(1.0, 2.0, 0.1))");
     assert!(tw.eval([0.9, 0.0, 0.0]) < 0.0);
     let (c, sn) = ((1.0f64).cos(), (1.0f64).sin());
-    assert!(tw.eval([0.9 * c, 1.0, -0.9 * sn]) < 0.0, "the bar turns with height");
+    assert!(
+        tw.eval([0.9 * c, 1.0, -0.9 * sn]) < 0.0,
+        "the bar turns with height"
+    );
     // Bend is the identity at x = 0.
     let bd = s("box(bend(p, 0.5), vec3(1.0, 0.2, 0.2))");
     assert!((bd.eval([0.0, 0.5, 0.0]) - 0.3).abs() < 1e-12);
     // Displacement is a distance term.
     let d = s("sphere(p, 1.0) + displace(p, 0.1, 5.0)");
     let p = [0.3, 0.4, 0.5];
-    assert!((d.eval(p) - (len(p) - 1.0 + 0.1 * (1.5f64).sin() * (2.0f64).sin() * (2.5f64).sin())).abs() < 1e-12);
+    assert!(
+        (d.eval(p) - (len(p) - 1.0 + 0.1 * (1.5f64).sin() * (2.0f64).sin() * (2.5f64).sin())).abs()
+            < 1e-12
+    );
     // Uniform scale: sphere(p / s, r) * s is a sphere of radius r*s.
     let sc = s("sphere(p / 2.0, 1.0) * 2.0");
     assert!((sc.eval([3.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
@@ -276,7 +334,12 @@ fn gradients_of_a_sphere_are_radial() {
     let p = [1.0, 0.5, -0.2];
     let d = [0.9, 0.3, -0.5];
     let l = len(d);
-    for mode in [GradientMode::Dual, GradientMode::Central(1e-4), GradientMode::Forward(1e-6), GradientMode::Tetrahedron(1e-5)] {
+    for mode in [
+        GradientMode::Dual,
+        GradientMode::Central(1e-4),
+        GradientMode::Forward(1e-6),
+        GradientMode::Tetrahedron(1e-5),
+    ] {
         let g = sh.gradient(p, mode);
         for i in 0..3 {
             assert!((g[i] - d[i] / l).abs() < 1e-5, "{mode:?}: {g:?}");

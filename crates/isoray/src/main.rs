@@ -1,1 +1,293 @@
-fn main() {}
+//! The `isoray` command line.
+
+use std::io::{BufRead, BufWriter, IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use clap::{Parser, Subcommand};
+use isoray_render::{output, render, tile_count, RenderOptions};
+use isoray_scene::{load, Scene, SceneError};
+
+/// Model implicit surfaces and render them with rays.
+#[derive(Parser)]
+#[command(name = "isoray", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to a PNG (and optional EXR depth and normal AOVs).
+    Render {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Output PNG.
+        #[arg(short, long, value_name = "OUT.png")]
+        output: PathBuf,
+        /// Image width (overrides render.width).
+        #[arg(long, value_name = "W")]
+        width: Option<u32>,
+        /// Image height (overrides render.height).
+        #[arg(long, value_name = "H")]
+        height: Option<u32>,
+        /// Supersampling factor: N×N samples per pixel (overrides render.aa).
+        #[arg(long, value_name = "N")]
+        aa: Option<u32>,
+        /// Override any scene key, e.g. render.shadows=hard or light.0.intensity=2.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Write the depth AOV (channel Z, t along the centre ray, +inf on misses).
+        #[arg(long, value_name = "F.exr")]
+        depth: Option<PathBuf>,
+        /// Write the normal AOV (channels R, G, B: world-space unit normal, 0 on misses).
+        #[arg(long, value_name = "F.exr")]
+        normals: Option<PathBuf>,
+        /// Worker threads (default: all cores).
+        #[arg(long, value_name = "N")]
+        threads: Option<usize>,
+        /// No progress bar and no summary.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// Read points `x y z` from stdin and print the scene's signed distance at each.
+    Eval {
+        /// The scene file.
+        scene: PathBuf,
+        /// Override any scene key.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Parse and type-check a scene; print `ok` or the errors.
+    Check {
+        /// The scene file.
+        scene: PathBuf,
+        /// Override any scene key.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+}
+
+/// A failure with its exit code: 1 for rendering/IO, 2 for bad input.
+struct Failure {
+    code: u8,
+    message: String,
+}
+
+impl From<SceneError> for Failure {
+    fn from(e: SceneError) -> Self {
+        Failure {
+            code: if e.io { 1 } else { 2 },
+            message: e.rendered,
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render {
+            scene,
+            output,
+            width,
+            height,
+            aa,
+            set,
+            depth,
+            normals,
+            threads,
+            quiet,
+        } => {
+            let mut overrides = set;
+            overrides.extend(width.map(|w| format!("render.width={w}")));
+            overrides.extend(height.map(|h| format!("render.height={h}")));
+            overrides.extend(aa.map(|a| format!("render.aa={a}")));
+            cmd_render(
+                &scene,
+                &overrides,
+                &output,
+                depth.as_deref(),
+                normals.as_deref(),
+                threads,
+                quiet,
+            )
+        }
+        Command::Eval { scene, set } => cmd_eval(&scene, &set),
+        Command::Check { scene, set } => load(&scene, &set)
+            .map(|_| println!("ok"))
+            .map_err(Failure::from),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => {
+            let msg = f.message.trim_end();
+            if msg.starts_with("error:") {
+                eprintln!("{msg}");
+            } else {
+                eprintln!("error: {msg}");
+            }
+            ExitCode::from(f.code)
+        }
+    }
+}
+
+fn usage(message: String) -> Failure {
+    Failure { code: 2, message }
+}
+
+fn io_failure(message: String) -> Failure {
+    Failure { code: 1, message }
+}
+
+fn cmd_render(
+    scene_path: &Path,
+    overrides: &[String],
+    out: &Path,
+    depth: Option<&Path>,
+    normals: Option<&Path>,
+    threads: Option<usize>,
+    quiet: bool,
+) -> Result<(), Failure> {
+    for (p, what) in [(Some(out), "png"), (depth, "exr"), (normals, "exr")] {
+        if let Some(p) = p {
+            let ext = p.extension().map(|e| e.to_string_lossy().to_lowercase());
+            if ext.as_deref() != Some(what) {
+                return Err(usage(format!(
+                    "output `{}` must end in .{what}",
+                    p.display()
+                )));
+            }
+        }
+    }
+    if threads == Some(0) {
+        return Err(usage("--threads must be at least 1".into()));
+    }
+    let scene = load(scene_path, overrides)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| io_failure(format!("cannot start worker threads: {e}")))?;
+    let progress = Arc::new(AtomicUsize::new(0));
+    let opts = RenderOptions {
+        aovs: depth.is_some() || normals.is_some(),
+        progress: Some(progress.clone()),
+    };
+    let start = Instant::now();
+    let (image, stats) = std::thread::scope(|sc| {
+        let handle = sc.spawn(|| pool.install(|| render(&scene, &opts)));
+        if !quiet {
+            show_progress(&handle, &progress, tile_count(&scene), start);
+        }
+        handle.join()
+    })
+    .map_err(|_| io_failure("the renderer failed unexpectedly".into()))?;
+    let elapsed = start.elapsed().as_secs_f64();
+    let w = |r: Result<(), output::OutputError>| r.map_err(|e| io_failure(e.to_string()));
+    w(output::write_png(
+        out,
+        image.width,
+        image.height,
+        &image.color,
+    ))?;
+    if let (Some(p), Some(d)) = (depth, &image.depth) {
+        w(output::write_exr_channel(
+            p,
+            image.width,
+            image.height,
+            "Z",
+            d,
+        ))?;
+    }
+    if let (Some(p), Some(n)) = (normals, &image.normals) {
+        w(output::write_exr_rgb(p, image.width, image.height, n))?;
+    }
+    if !quiet {
+        summary(&scene, &stats, elapsed, out);
+    }
+    Ok(())
+}
+
+fn show_progress<T>(
+    handle: &std::thread::ScopedJoinHandle<'_, T>,
+    done: &AtomicUsize,
+    total: usize,
+    start: Instant,
+) {
+    let mut bar: Option<indicatif::ProgressBar> = None;
+    while !handle.is_finished() {
+        std::thread::sleep(Duration::from_millis(50));
+        if bar.is_none()
+            && start.elapsed() > Duration::from_secs(1)
+            && std::io::stderr().is_terminal()
+        {
+            let b = indicatif::ProgressBar::new(total as u64);
+            b.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{spinner} rendering [{bar:40}] {percent}% tiles {pos}/{len}, eta {eta}",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                .progress_chars("=> "),
+            );
+            bar = Some(b);
+        }
+        if let Some(b) = &bar {
+            b.set_position(done.load(Ordering::Relaxed) as u64);
+        }
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+}
+
+fn summary(scene: &Scene, stats: &isoray_render::Stats, secs: f64, out: &Path) {
+    let r = &scene.render;
+    let secs = secs.max(1e-9);
+    eprintln!(
+        "rendered {}x{} (aa {}, {} primary rays) in {:.2} s: {:.2} M primary rays/s, {:.1} M distance evaluations/s -> {}",
+        r.width,
+        r.height,
+        r.aa,
+        stats.primary_rays,
+        secs,
+        stats.primary_rays as f64 / secs / 1e6,
+        stats.evaluations as f64 / secs / 1e6,
+        out.display()
+    );
+}
+
+fn cmd_eval(scene_path: &Path, overrides: &[String]) -> Result<(), Failure> {
+    let scene = load(scene_path, overrides)?;
+    let mut eval = isoray_shape::PointEvaluator::<f64>::new(scene.shape.tape());
+    let stdin = std::io::stdin();
+    let stdout = std::io::stdout();
+    let mut out = BufWriter::new(stdout.lock());
+    for (n, line) in stdin.lock().lines().enumerate() {
+        let line = line.map_err(|e| io_failure(format!("cannot read stdin: {e}")))?;
+        let text = line.trim();
+        if text.is_empty() || text.starts_with('#') {
+            continue;
+        }
+        let nums: Vec<&str> = text
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|s| !s.is_empty())
+            .collect();
+        let parsed: Option<Vec<f64>> = nums.iter().map(|s| s.parse::<f64>().ok()).collect();
+        let p = match parsed {
+            Some(v) if v.len() == 3 => v,
+            _ => {
+                return Err(usage(format!(
+                    "stdin:{}: expected three numbers `x y z`, found `{text}`",
+                    n + 1
+                )))
+            }
+        };
+        let d = eval.eval(p[0], p[1], p[2]);
+        writeln!(out, "{d}").map_err(|e| io_failure(format!("cannot write stdout: {e}")))?;
+    }
+    out.flush()
+        .map_err(|e| io_failure(format!("cannot write stdout: {e}")))?;
+    Ok(())
+}

@@ -1,0 +1,165 @@
+//! Writing images: PNG (sRGB) and OpenEXR AOVs, always atomically: the data
+//! goes to a temporary file beside the target, which is renamed over it only
+//! when complete, so a failed write leaves any old file intact.
+
+use std::path::{Path, PathBuf};
+
+use exr::prelude::*;
+
+/// An output failure.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// Writing the file failed.
+    #[error("cannot write `{path}`: {message}")]
+    Write {
+        /// The target.
+        path: String,
+        /// What went wrong.
+        message: String,
+    },
+}
+
+/// The sRGB transfer function of a linear value in [0, 1].
+pub fn linear_to_srgb(x: f32) -> f32 {
+    let x = x.clamp(0.0, 1.0);
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Linear RGB to 8-bit sRGB bytes.
+pub fn to_srgb8(rgb: &[[f32; 3]]) -> Vec<u8> {
+    rgb.iter()
+        .flat_map(|c| c.map(|v| (linear_to_srgb(v) * 255.0 + 0.5) as u8))
+        .collect()
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+fn atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> std::result::Result<(), OutputError> {
+    let fail = |message: String| OutputError::Write {
+        path: path.display().to_string(),
+        message,
+    };
+    if path.is_dir() {
+        return Err(fail("it is a directory".into()));
+    }
+    let tmp = temp_path(path);
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(fail(e));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        fail(e.to_string())
+    })
+}
+
+/// Writes linear RGB as an 8-bit sRGB PNG.
+pub fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[[f32; 3]],
+) -> std::result::Result<(), OutputError> {
+    let bytes = to_srgb8(rgb);
+    atomically(path, |tmp| {
+        if bytes.len() != width as usize * height as usize * 3 {
+            return Err(format!(
+                "{} pixels given for a {width}x{height} image",
+                rgb.len()
+            ));
+        }
+        image::save_buffer_with_format(
+            tmp,
+            &bytes,
+            width,
+            height,
+            image::ColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| e.to_string())
+    })
+}
+
+/// Writes one 32-bit float channel named `name` (e.g. `Z`).
+pub fn write_exr_channel(
+    path: &Path,
+    width: u32,
+    height: u32,
+    name: &str,
+    data: &[f32],
+) -> std::result::Result<(), OutputError> {
+    let channel = AnyChannel::new(name, FlatSamples::F32(data.to_vec()));
+    let layer = Layer::new(
+        (width as usize, height as usize),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(SmallVec::from_vec(vec![channel])),
+    );
+    let image = Image::from_layer(layer);
+    atomically(path, |tmp| {
+        image.write().to_file(tmp).map_err(|e| e.to_string())
+    })
+}
+
+/// Writes three 32-bit float channels R, G, B.
+pub fn write_exr_rgb(
+    path: &Path,
+    width: u32,
+    height: u32,
+    data: &[[f32; 3]],
+) -> std::result::Result<(), OutputError> {
+    let w = width as usize;
+    atomically(path, |tmp| {
+        write_rgb_file(tmp, w, height as usize, |x, y| {
+            let c = data[y * w + x];
+            (c[0], c[1], c[2])
+        })
+        .map_err(|e| e.to_string())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_known_values() {
+        assert_eq!(linear_to_srgb(0.0), 0.0);
+        assert!((linear_to_srgb(1.0) - 1.0).abs() < 1e-6);
+        // 0.5 linear is 0.7354 in sRGB (188 in 8 bits).
+        assert!((linear_to_srgb(0.5) - 0.735_357).abs() < 1e-5);
+        assert_eq!(to_srgb8(&[[0.5, 0.0, 1.0]]), vec![188, 0, 255]);
+    }
+
+    #[test]
+    fn failed_write_keeps_old_file() {
+        let dir = std::env::temp_dir().join(format!("isoray-out-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let target = dir.join("a.png");
+        write_png(&target, 1, 1, &[[1.0, 0.0, 0.0]]).unwrap();
+        let before = std::fs::read(&target).unwrap();
+        // A wrong-sized buffer makes the encoder fail: the old file must survive.
+        assert!(write_png(&target, 2, 2, &[[0.0; 3]]).is_err());
+        assert_eq!(std::fs::read(&target).unwrap(), before);
+        let leftovers: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+            .collect();
+        assert!(leftovers.is_empty());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

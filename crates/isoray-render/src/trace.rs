@@ -1,0 +1,246 @@
+//! The wavefront sphere tracer: rays are traced in packets, and every step
+//! evaluates the distance of all still-active rays with one batch call, so the
+//! shape tape runs over structure-of-arrays blocks (the hot path).
+
+use isoray_scene::{RenderSettings, ShadowMode};
+use isoray_shape::BatchEvaluator;
+
+/// Scratch buffers reused across packets (no allocation per ray).
+#[derive(Debug, Default)]
+pub struct Scratch {
+    xs: Vec<f32>,
+    ys: Vec<f32>,
+    zs: Vec<f32>,
+    ds: Vec<f32>,
+    active: Vec<u32>,
+    next: Vec<u32>,
+}
+
+impl Scratch {
+    fn gather(&mut self, n: usize) {
+        self.xs.resize(n, 0.0);
+        self.ys.resize(n, 0.0);
+        self.zs.resize(n, 0.0);
+        self.ds.resize(n, 0.0);
+    }
+}
+
+/// A packet of rays (structure of arrays).
+#[derive(Debug, Default, Clone)]
+pub struct Rays {
+    /// Origins.
+    pub ox: Vec<f32>,
+    /// Origins.
+    pub oy: Vec<f32>,
+    /// Origins.
+    pub oz: Vec<f32>,
+    /// Unit directions.
+    pub dx: Vec<f32>,
+    /// Unit directions.
+    pub dy: Vec<f32>,
+    /// Unit directions.
+    pub dz: Vec<f32>,
+}
+
+impl Rays {
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.ox.len()
+    }
+    /// True when empty.
+    pub fn is_empty(&self) -> bool {
+        self.ox.is_empty()
+    }
+    /// Removes all rays, keeping capacity.
+    pub fn clear(&mut self) {
+        for v in [
+            &mut self.ox,
+            &mut self.oy,
+            &mut self.oz,
+            &mut self.dx,
+            &mut self.dy,
+            &mut self.dz,
+        ] {
+            v.clear();
+        }
+    }
+    /// Adds a ray.
+    pub fn push(&mut self, o: [f32; 3], d: [f32; 3]) {
+        self.ox.push(o[0]);
+        self.oy.push(o[1]);
+        self.oz.push(o[2]);
+        self.dx.push(d[0]);
+        self.dy.push(d[1]);
+        self.dz.push(d[2]);
+    }
+}
+
+/// The result of tracing one ray.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Hit {
+    /// Distance along the ray; +inf on a miss.
+    pub t: f32,
+    /// Steps taken.
+    pub steps: u32,
+}
+
+/// Sphere-traces every ray of the packet. Returns the number of distance evaluations.
+pub fn sphere_trace(
+    eval: &mut BatchEvaluator<f32>,
+    rays: &Rays,
+    s: &RenderSettings,
+    scratch: &mut Scratch,
+    hits: &mut Vec<Hit>,
+) -> u64 {
+    let n = rays.len();
+    hits.clear();
+    hits.resize(n, Hit { t: 0.0, steps: 0 });
+    let eps = s.hit_epsilon as f32;
+    let tmax = s.max_distance as f32;
+    let scale = s.step_scale as f32;
+    let mut evals = 0u64;
+    scratch.active.clear();
+    scratch.active.extend(0..n as u32);
+    let mut step = 0;
+    while !scratch.active.is_empty() {
+        let m = scratch.active.len();
+        scratch.gather(m);
+        for (k, &i) in scratch.active.iter().enumerate() {
+            let i = i as usize;
+            let t = hits[i].t;
+            scratch.xs[k] = rays.ox[i] + rays.dx[i] * t;
+            scratch.ys[k] = rays.oy[i] + rays.dy[i] * t;
+            scratch.zs[k] = rays.oz[i] + rays.dz[i] * t;
+        }
+        eval.eval(
+            &scratch.xs[..m],
+            &scratch.ys[..m],
+            &scratch.zs[..m],
+            &mut scratch.ds[..m],
+        );
+        evals += m as u64;
+        step += 1;
+        scratch.next.clear();
+        for (k, &i) in scratch.active.iter().enumerate() {
+            let h = &mut hits[i as usize];
+            let d = scratch.ds[k];
+            h.steps = step;
+            let threshold = if s.relative_epsilon { eps * h.t } else { eps };
+            if d < threshold {
+                continue; // hit at h.t
+            }
+            if d.is_nan() {
+                h.t = f32::INFINITY; // undefined field: treat as a miss
+                continue;
+            }
+            h.t += d * scale;
+            if h.t > tmax {
+                h.t = f32::INFINITY;
+            } else if step < s.max_steps {
+                scratch.next.push(i);
+            }
+            // Out of steps while still inside the range: accept as a hit (the
+            // ray is grazing a surface), as most sphere tracers do.
+        }
+        std::mem::swap(&mut scratch.active, &mut scratch.next);
+    }
+    evals
+}
+
+/// Marches shadow rays from surface points towards lights and returns the
+/// visibility (0 = shadowed, 1 = lit) of each. `size` is the light's penumbra
+/// size and `tmax` the distance to the light (per ray). Returns evaluations.
+#[allow(clippy::too_many_arguments)]
+pub fn shadow_march(
+    eval: &mut BatchEvaluator<f32>,
+    rays: &Rays,
+    tmax: &[f32],
+    mode: ShadowMode,
+    size: f32,
+    s: &RenderSettings,
+    scratch: &mut Scratch,
+    vis: &mut Vec<f32>,
+) -> u64 {
+    let n = rays.len();
+    vis.clear();
+    vis.resize(n, 1.0);
+    if mode == ShadowMode::None || n == 0 {
+        return 0;
+    }
+    let eps = s.hit_epsilon as f32;
+    let start = s.shadow_start as f32;
+    let min_step = (0.5 * start).max(eps);
+    let mut t = vec![start; n];
+    let mut evals = 0u64;
+    scratch.active.clear();
+    scratch
+        .active
+        .extend((0..n as u32).filter(|&i| start < tmax[i as usize]));
+    let mut step = 0;
+    while !scratch.active.is_empty() && step < s.shadow_max_steps {
+        let m = scratch.active.len();
+        scratch.gather(m);
+        for (k, &i) in scratch.active.iter().enumerate() {
+            let i = i as usize;
+            scratch.xs[k] = rays.ox[i] + rays.dx[i] * t[i];
+            scratch.ys[k] = rays.oy[i] + rays.dy[i] * t[i];
+            scratch.zs[k] = rays.oz[i] + rays.dz[i] * t[i];
+        }
+        eval.eval(
+            &scratch.xs[..m],
+            &scratch.ys[..m],
+            &scratch.zs[..m],
+            &mut scratch.ds[..m],
+        );
+        evals += m as u64;
+        step += 1;
+        scratch.next.clear();
+        for (k, &i) in scratch.active.iter().enumerate() {
+            let i = i as usize;
+            let d = scratch.ds[k];
+            let ti = t[i];
+            let keep = match mode {
+                ShadowMode::Hard => {
+                    if d < eps {
+                        vis[i] = 0.0;
+                        false
+                    } else {
+                        t[i] += d;
+                        true
+                    }
+                }
+                ShadowMode::Soft => {
+                    if d < eps {
+                        vis[i] = 0.0;
+                        false
+                    } else {
+                        vis[i] = vis[i].min(d / (size * ti));
+                        t[i] += d;
+                        true
+                    }
+                }
+                ShadowMode::Improved => {
+                    // Tolerates slight penetration: the estimate may go down to -1
+                    // and is remapped smoothly at the end.
+                    vis[i] = vis[i].min(d / (size * ti));
+                    t[i] += d.max(min_step);
+                    vis[i] > -1.0
+                }
+                ShadowMode::None => false,
+            };
+            if keep && t[i] < tmax[i] {
+                scratch.next.push(i as u32);
+            }
+        }
+        std::mem::swap(&mut scratch.active, &mut scratch.next);
+    }
+    match mode {
+        ShadowMode::Soft => vis.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0)),
+        ShadowMode::Improved => vis.iter_mut().for_each(|v| {
+            let r = v.clamp(-1.0, 1.0);
+            *v = 0.25 * (1.0 + r) * (1.0 + r) * (2.0 - r);
+        }),
+        _ => {}
+    }
+    evals
+}
