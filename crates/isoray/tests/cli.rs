@@ -1,0 +1,273 @@
+//! End-to-end tests of the `isoray` binary: outputs, exit codes, messages.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn isoray() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_isoray"))
+}
+
+fn examples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("isoray-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn run(cmd: &mut Command) -> Output {
+    cmd.output().expect("isoray runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn write_scene(name: &str, text: &str) -> PathBuf {
+    let p = tmp(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const SPHERE: &str = "[camera]\nposition = [0.0, 0.0, 4.0]\n[render]\nwidth = 40\nheight = 30\n[[light]]\n[[object]]\nshape = \"sphere(p, 1.0)\"\n";
+
+#[test]
+fn renders_every_example() {
+    for entry in std::fs::read_dir(examples()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let out = tmp(&format!(
+            "{}.png",
+            path.file_stem().unwrap().to_string_lossy()
+        ));
+        let o = run(isoray()
+            .arg("render")
+            .arg(&path)
+            .arg("-o")
+            .arg(&out)
+            .args(["--width", "64", "--height", "36", "--aa", "1"]));
+        assert!(o.status.success(), "{}: {}", path.display(), stderr(&o));
+        let img = image::open(&out).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (64, 36));
+        // The summary line reports resolution and speed.
+        let e = stderr(&o);
+        assert!(e.contains("rendered 64x36") && e.contains("rays/s"), "{e}");
+    }
+}
+
+#[test]
+fn depth_and_normal_aovs_are_exr() {
+    let scene = write_scene("aov.toml", SPHERE);
+    let (png, depth, normals) = (tmp("aov.png"), tmp("aov-depth.exr"), tmp("aov-normals.exr"));
+    let o = run(isoray()
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&png)
+        .arg("--depth")
+        .arg(&depth)
+        .arg("--normals")
+        .arg(&normals)
+        .arg("--quiet"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        o.stderr.is_empty(),
+        "--quiet prints nothing: {}",
+        stderr(&o)
+    );
+    let read = |p: &Path| exr::prelude::read_all_flat_layers_from_file(p).unwrap();
+    let d = read(&depth);
+    let layer = &d.layer_data[0];
+    let names: Vec<String> = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
+    assert_eq!(names, vec!["Z"]);
+    let z = |x: usize, y: usize| {
+        layer.channel_data.list[0]
+            .sample_data
+            .value_by_flat_index(y * 40 + x)
+            .to_f32()
+    };
+    // Pixels (19,14)..(20,15) surround the centre; the sphere front is at t ≈ 3.
+    assert!((z(20, 15) - 3.0).abs() < 0.01, "{}", z(20, 15));
+    assert_eq!(z(0, 0), f32::INFINITY);
+    let n = read(&normals);
+    let names: Vec<String> = n.layer_data[0]
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
+    assert_eq!(names, vec!["B", "G", "R"]);
+    let b = n.layer_data[0].channel_data.list[0]
+        .sample_data
+        .value_by_flat_index(15 * 40 + 20)
+        .to_f32();
+    assert!(b > 0.99, "normal facing the camera has z ≈ 1, got {b}");
+}
+
+#[test]
+fn eval_prints_distances() {
+    let scene = write_scene("eval.toml", SPHERE);
+    let mut child = isoray()
+        .arg("eval")
+        .arg(&scene)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"2 0 0\n0 0 0\n\n# comment\n0.6 0.0 0.8\n1e-3 0 0\n")
+        .unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let vals: Vec<f64> = String::from_utf8(o.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    assert_eq!(vals.len(), 4);
+    assert_eq!(vals[0], 1.0);
+    assert_eq!(vals[1], -1.0);
+    assert!(vals[2].abs() < 1e-15);
+    assert_eq!(vals[3], 1e-3 - 1.0, "full precision");
+
+    let mut child = isoray()
+        .arg("eval")
+        .arg(&scene)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"1 2 3\n1 2\n")
+        .unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("stdin:2: expected three numbers"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn eval_uses_smooth_union_when_blending() {
+    let text = "[render]\nblend = 0.5\n[[object]]\nshape = \"sphere(p, 1.0)\"\n[[object]]\nshape = \"sphere(p - vec3(1.5, 0.0, 0.0), 1.0)\"\n";
+    let scene = write_scene("blend.toml", text);
+    let mut child = isoray()
+        .arg("eval")
+        .arg(&scene)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"0.75 0 0\n")
+        .unwrap();
+    let o = child.wait_with_output().unwrap();
+    let v: f64 = String::from_utf8(o.stdout).unwrap().trim().parse().unwrap();
+    // Both distances are -0.25: min - k/4 = -0.25 - 0.125.
+    assert!((v - -0.375).abs() < 1e-12, "{v}");
+}
+
+#[test]
+fn check_reports_ok_or_located_errors() {
+    let good = write_scene("good.toml", SPHERE);
+    let o = run(isoray().arg("check").arg(&good));
+    assert!(o.status.success());
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "ok");
+
+    let bad = write_scene(
+        "bad.toml",
+        "[[object]]\nshape = \"sphere(p, vec2(1.0, 2.0))\"\n",
+    );
+    let o = run(isoray().arg("check").arg(&bad));
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.starts_with("error: argument `r` of `sphere` must be a `float`"),
+        "{e}"
+    );
+    assert!(e.contains("bad.toml:2:20"), "{e}");
+    assert!(e.contains("^^^^^^^^^^^^^^"), "{e}");
+}
+
+#[test]
+fn exit_codes() {
+    let good = write_scene("codes.toml", SPHERE);
+    // Usage errors: 2.
+    assert_eq!(run(isoray().arg("render")).status.code(), Some(2));
+    assert_eq!(
+        run(isoray().arg("render").arg(&good).args(["-o", "x.jpg"]))
+            .status
+            .code(),
+        Some(2)
+    );
+    let o = run(isoray()
+        .arg("render")
+        .arg(&good)
+        .arg("-o")
+        .arg(tmp("c.png"))
+        .args(["--set", "render.aa=0"]));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("render.aa"), "{}", stderr(&o));
+    // I/O failures: 1.
+    let o = run(isoray()
+        .arg("render")
+        .arg(&good)
+        .args(["-o", "/nonexistent-dir/x.png"]));
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).starts_with("error: cannot write `/nonexistent-dir/x.png`"),
+        "{}",
+        stderr(&o)
+    );
+    let o = run(isoray().args(["check", "/nonexistent/scene.toml"]));
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("cannot read"));
+}
+
+#[test]
+fn thread_count_does_not_change_the_png() {
+    let scene = examples().join("showcase.toml");
+    let render = |threads: &str, name: &str| {
+        let out = tmp(name);
+        let o = run(isoray()
+            .arg("render")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&out)
+            .args([
+                "--width",
+                "80",
+                "--height",
+                "45",
+                "--threads",
+                threads,
+                "--quiet",
+            ]));
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read(out).unwrap()
+    };
+    assert_eq!(render("1", "t1.png"), render("2", "t2.png"));
+}
