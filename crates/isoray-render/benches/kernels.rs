@@ -7,7 +7,15 @@ use isoray_shape::{BatchEvaluator, PointEvaluator};
 
 fn showcase() -> isoray_scene::Scene {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/showcase.toml");
-    isoray_scene::load(std::path::Path::new(path), &["render.width=64".into(), "render.height=64".into(), "render.aa=1".into()]).expect("showcase loads")
+    isoray_scene::load(
+        std::path::Path::new(path),
+        &[
+            "render.width=64".into(),
+            "render.height=64".into(),
+            "render.aa=1".into(),
+        ],
+    )
+    .expect("showcase loads")
 }
 
 fn points(n: usize) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
@@ -52,7 +60,9 @@ fn bench(c: &mut Criterion) {
     g.finish();
     let mut g = c.benchmark_group("render");
     g.sample_size(10);
-    g.bench_function("showcase_64x64", |b| b.iter(|| render(&scene, &RenderOptions::default())));
+    g.bench_function("showcase_64x64", |b| {
+        b.iter(|| render(&scene, &RenderOptions::default()))
+    });
     g.finish();
 }
 

@@ -150,6 +150,7 @@ pub(crate) struct Lowerer<'a> {
     pub(crate) source: SourceId,
     scope: Vec<(String, Val)>,
     calls: Vec<String>,
+    depth: usize,
 }
 
 /// A lowered argument and where it was written.
@@ -161,6 +162,9 @@ pub(crate) struct Arg {
 
 const MAX_INLINE_DEPTH: usize = 64;
 
+/// Bound on the recursion of lowering (expression depth across inlined surfaces).
+const MAX_LOWER_DEPTH: usize = 5000;
+
 impl<'a> Lowerer<'a> {
     fn new(b: &'a mut Builder, lib: &'a Library, source: SourceId) -> Self {
         Lowerer {
@@ -169,6 +173,7 @@ impl<'a> Lowerer<'a> {
             source,
             scope: Vec::new(),
             calls: Vec::new(),
+            depth: 0,
         }
     }
 
@@ -220,6 +225,20 @@ impl<'a> Lowerer<'a> {
     }
 
     pub(crate) fn expr(&mut self, e: &Expr) -> Result<Val, Diagnostic> {
+        if self.depth >= MAX_LOWER_DEPTH {
+            return Err(self
+                .err(e.span, "expression nested too deeply")
+                .with_label(format!(
+                    "more than {MAX_LOWER_DEPTH} levels, counting surfaces called inside surfaces"
+                )));
+        }
+        self.depth += 1;
+        let r = self.expr_inner(e);
+        self.depth -= 1;
+        r
+    }
+
+    fn expr_inner(&mut self, e: &Expr) -> Result<Val, Diagnostic> {
         match &e.kind {
             ExprKind::Num(v) => Ok(Val::float(self.b.constant(*v))),
             ExprKind::Var(name) => {

@@ -260,6 +260,10 @@ struct Parser<'a> {
 /// Maximum nesting depth, so that hostile input cannot overflow the stack.
 const MAX_DEPTH: usize = 200;
 
+/// Maximum length of a chain of binary operators (`a + b + c + ...`), which
+/// parses into a left-deep tree that later passes walk recursively.
+const MAX_CHAIN: usize = 2000;
+
 /// Parses a snippet of shape text.
 pub fn parse(text: &str, source: SourceId) -> Result<Program, Diagnostic> {
     let toks = lex(text, source)?;
@@ -421,7 +425,15 @@ impl Parser<'_> {
 
     fn additive(&mut self) -> Result<Expr, Diagnostic> {
         let mut lhs = self.term()?;
+        let mut chain = 0;
         loop {
+            chain += 1;
+            if chain > MAX_CHAIN {
+                return Err(self.err(
+                    "expression too long",
+                    format!("more than {MAX_CHAIN} operators in a row; use `let` bindings"),
+                ));
+            }
             let op = match self.peek().tok {
                 Tok::Punct('+') => BinaryOp::Add,
                 Tok::Punct('-') => BinaryOp::Sub,
@@ -439,7 +451,15 @@ impl Parser<'_> {
 
     fn term(&mut self) -> Result<Expr, Diagnostic> {
         let mut lhs = self.unary()?;
+        let mut chain = 0;
         loop {
+            chain += 1;
+            if chain > MAX_CHAIN {
+                return Err(self.err(
+                    "expression too long",
+                    format!("more than {MAX_CHAIN} operators in a row; use `let` bindings"),
+                ));
+            }
             let op = match self.peek().tok {
                 Tok::Punct('*') => BinaryOp::Mul,
                 Tok::Punct('/') => BinaryOp::Div,
@@ -626,5 +646,9 @@ mod tests {
         assert!(parse(&s, 0).is_err());
         let s = "-".repeat(10_000) + "1";
         assert!(parse(&s, 0).is_err());
+        let s = vec!["1.0"; 100_000].join(" + ");
+        assert!(parse(&s, 0).is_err());
+        let s = vec!["p.x"; 500].join(" * ");
+        assert!(parse(&s, 0).is_ok());
     }
 }
