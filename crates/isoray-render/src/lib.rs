@@ -433,6 +433,7 @@ impl<'s> Worker<'s> {
             return vec![ctx.surfaces[0]; m];
         }
         let k = ctx.scene.render.blend as f32;
+        let km = k * ctx.scene.render.material_blend as f32;
         let mut acc_d = vec![0.0f32; m];
         let mut d = vec![0.0f32; m];
         let mut out = vec![ctx.surfaces[0]; m];
@@ -446,7 +447,7 @@ impl<'s> Worker<'s> {
             for q in 0..m {
                 let (a, b) = (acc_d[q], d[q]);
                 if k > 0.0 {
-                    let h = (0.5 + 0.5 * (a - b) / k).clamp(0.0, 1.0);
+                    let h = (0.5 + 0.5 * (a - b) / km).clamp(0.0, 1.0);
                     out[q] = out[q].mix(&ctx.surfaces[j], h);
                     let hh = (k - (a - b).abs()).max(0.0);
                     acc_d[q] = a.min(b) - hh * hh * 0.25 / k;

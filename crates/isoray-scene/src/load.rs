@@ -472,6 +472,12 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 ao_intensity: r.non_negative("ao_intensity", d.ao_intensity)?,
                 background: r.color("background", d.background)?,
                 blend: r.non_negative("blend", d.blend)?,
+                material_blend: r.num_in(
+                    "material_blend",
+                    d.material_blend,
+                    |x| x > 0.0 && x <= 1.0,
+                    "a fraction in (0, 1]",
+                )?,
                 view: r.choice(
                     "view",
                     &[
@@ -840,6 +846,7 @@ pub const RENDER_KEYS: &[&str] = &[
     "ao_intensity",
     "background",
     "blend",
+    "material_blend",
     "view",
 ];
 

@@ -107,6 +107,9 @@ pub struct RenderSettings {
     pub background: Vec3,
     /// 0: objects combine by union; k > 0: smooth union with this k (default 0).
     pub blend: f64,
+    /// Fraction of the blend width over which materials mix (default 0.3;
+    /// 1 mixes over the whole width, small values give sharp colour seams).
+    pub material_blend: f64,
     /// What the image shows (default shaded).
     pub view: View,
 }
@@ -135,6 +138,7 @@ impl Default for RenderSettings {
             ao_intensity: 1.0,
             background: [0.95, 0.95, 0.95],
             blend: 0.0,
+            material_blend: 0.3,
             view: View::Shaded,
         }
     }
