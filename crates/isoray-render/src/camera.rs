@@ -45,10 +45,7 @@ impl RayCamera {
     pub fn direction(&self, x: f64, y: f64) -> DVec3 {
         let ndc_x = x / self.width * 2.0 - 1.0;
         let ndc_y = 1.0 - y / self.height * 2.0;
-        (self.forward
-            + ndc_x * self.tan_half * self.aspect * self.right
-            + ndc_y * self.tan_half * self.up)
-            .normalize()
+        (self.forward + ndc_x * self.tan_half * self.aspect * self.right + ndc_y * self.tan_half * self.up).normalize()
     }
 }
 

@@ -227,13 +227,7 @@ impl<'s> Worker<'s> {
     /// Traces `self.rays` and computes hit positions and normals.
     fn trace_and_normals(&mut self, ctx: &Ctx) -> (HitSet, u64) {
         let s = &ctx.scene.render;
-        let mut evals = sphere_trace(
-            &mut self.scene_eval,
-            &self.rays,
-            s,
-            &mut self.scratch,
-            &mut self.hits,
-        );
+        let mut evals = sphere_trace(&mut self.scene_eval, &self.rays, s, &mut self.scratch, &mut self.hits);
         let mut hs = HitSet::default();
         for (i, h) in self.hits.iter().enumerate() {
             if h.t.is_finite() {
@@ -247,15 +241,8 @@ impl<'s> Worker<'s> {
         hs.nx.resize(m, 0.0);
         hs.ny.resize(m, 0.0);
         hs.nz.resize(m, 0.0);
-        self.scene_eval.gradients(
-            &hs.px,
-            &hs.py,
-            &hs.pz,
-            ctx.gradient,
-            &mut hs.nx,
-            &mut hs.ny,
-            &mut hs.nz,
-        );
+        self.scene_eval
+            .gradients(&hs.px, &hs.py, &hs.pz, ctx.gradient, &mut hs.nx, &mut hs.ny, &mut hs.nz);
         evals += m as u64 * gradient_cost(ctx.gradient);
         for k in 0..m {
             let n = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]).normalize_or_zero();
@@ -285,8 +272,7 @@ impl<'s> Worker<'s> {
                     for sx in 0..aa {
                         let x = (x0 + i) as f64 + (sx as f64 + 0.5) / aa as f64;
                         let y = (y0 + j) as f64 + (sy as f64 + 0.5) / aa as f64;
-                        self.rays
-                            .push(origin, ctx.cam.direction(x, y).as_vec3().to_array());
+                        self.rays.push(origin, ctx.cam.direction(x, y).as_vec3().to_array());
                     }
                 }
             }
@@ -318,9 +304,7 @@ impl<'s> Worker<'s> {
             self.rays.clear();
             for j in 0..th {
                 for i in 0..tw {
-                    let d = ctx
-                        .cam
-                        .direction((x0 + i) as f64 + 0.5, (y0 + j) as f64 + 0.5);
+                    let d = ctx.cam.direction((x0 + i) as f64 + 0.5, (y0 + j) as f64 + 0.5);
                     self.rays.push(origin, d.as_vec3().to_array());
                 }
             }
@@ -375,9 +359,7 @@ impl<'s> Worker<'s> {
             for k in 0..m {
                 let p = pos(k);
                 let (l, dist) = match light.kind {
-                    LightKind::Directional { direction } => {
-                        (Vec3::from(direction.map(|c| c as f32)), f32::INFINITY)
-                    }
+                    LightKind::Directional { direction } => (Vec3::from(direction.map(|c| c as f32)), f32::INFINITY),
                     LightKind::Point { position } => {
                         let v = Vec3::from(position.map(|c| c as f32)) - p;
                         (v.normalize_or_zero(), v.length())
@@ -415,8 +397,7 @@ impl<'s> Worker<'s> {
                 if s.shadows != ShadowMode::None && s.shadow_exponent != 1.0 {
                     sh = sh.powf(s.shadow_exponent as f32);
                 }
-                color[k] +=
-                    radiance * atten[k] * sh * shade::direct(&surfaces[k], nrm(k), v, dirs[k]);
+                color[k] += radiance * atten[k] * sh * shade::direct(&surfaces[k], nrm(k), v, dirs[k]);
             }
         }
         for (k, &i) in hs.idx.iter().enumerate() {
@@ -463,12 +444,7 @@ impl<'s> Worker<'s> {
     /// Ambient occlusion by sampling the distance along the normal:
     /// ao = clamp(1 − intensity · Σᵢ wᵢ (iδ − d(p + iδn)) / (iδ), 0, 1),
     /// with weights wᵢ ∝ 2⁻ⁱ normalised to sum to 1.
-    fn ambient_occlusion(
-        &mut self,
-        s: &isoray_scene::RenderSettings,
-        hs: &HitSet,
-        evals: &mut u64,
-    ) -> Vec<f32> {
+    fn ambient_occlusion(&mut self, s: &isoray_scene::RenderSettings, hs: &HitSet, evals: &mut u64) -> Vec<f32> {
         let m = hs.idx.len();
         if !s.ao || s.ao_intensity == 0.0 {
             return vec![1.0; m];

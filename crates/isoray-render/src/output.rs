@@ -67,19 +67,11 @@ fn atomically(
 }
 
 /// Writes linear RGB as an 8-bit sRGB PNG.
-pub fn write_png(
-    path: &Path,
-    width: u32,
-    height: u32,
-    rgb: &[[f32; 3]],
-) -> std::result::Result<(), OutputError> {
+pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> std::result::Result<(), OutputError> {
     let bytes = to_srgb8(rgb);
     atomically(path, |tmp| {
         if bytes.len() != width as usize * height as usize * 3 {
-            return Err(format!(
-                "{} pixels given for a {width}x{height} image",
-                rgb.len()
-            ));
+            return Err(format!("{} pixels given for a {width}x{height} image", rgb.len()));
         }
         image::save_buffer_with_format(
             tmp,
@@ -109,18 +101,11 @@ pub fn write_exr_channel(
         AnyChannels::sort(SmallVec::from_vec(vec![channel])),
     );
     let image = Image::from_layer(layer);
-    atomically(path, |tmp| {
-        image.write().to_file(tmp).map_err(|e| e.to_string())
-    })
+    atomically(path, |tmp| image.write().to_file(tmp).map_err(|e| e.to_string()))
 }
 
 /// Writes three 32-bit float channels R, G, B.
-pub fn write_exr_rgb(
-    path: &Path,
-    width: u32,
-    height: u32,
-    data: &[[f32; 3]],
-) -> std::result::Result<(), OutputError> {
+pub fn write_exr_rgb(path: &Path, width: u32, height: u32, data: &[[f32; 3]]) -> std::result::Result<(), OutputError> {
     let w = width as usize;
     atomically(path, |tmp| {
         write_rgb_file(tmp, w, height as usize, |x, y| {

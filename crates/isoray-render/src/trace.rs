@@ -17,11 +17,22 @@ pub struct Scratch {
 }
 
 impl Scratch {
-    fn gather(&mut self, n: usize) {
-        self.xs.resize(n, 0.0);
-        self.ys.resize(n, 0.0);
-        self.zs.resize(n, 0.0);
-        self.ds.resize(n, 0.0);
+    /// Gathers the points o + t·d of the active rays and evaluates the
+    /// distance there into `self.ds`. Returns the number of evaluations.
+    fn eval_active(&mut self, eval: &mut BatchEvaluator<f32>, rays: &Rays, t: impl Fn(usize) -> f32) -> u64 {
+        let m = self.active.len();
+        for v in [&mut self.xs, &mut self.ys, &mut self.zs, &mut self.ds] {
+            v.resize(m, 0.0);
+        }
+        for (k, &i) in self.active.iter().enumerate() {
+            let i = i as usize;
+            let ti = t(i);
+            self.xs[k] = rays.ox[i] + rays.dx[i] * ti;
+            self.ys[k] = rays.oy[i] + rays.dy[i] * ti;
+            self.zs[k] = rays.oz[i] + rays.dz[i] * ti;
+        }
+        eval.eval(&self.xs[..m], &self.ys[..m], &self.zs[..m], &mut self.ds[..m]);
+        m as u64
     }
 }
 
@@ -103,22 +114,7 @@ pub fn sphere_trace(
     scratch.active.extend(0..n as u32);
     let mut step = 0;
     while !scratch.active.is_empty() {
-        let m = scratch.active.len();
-        scratch.gather(m);
-        for (k, &i) in scratch.active.iter().enumerate() {
-            let i = i as usize;
-            let t = hits[i].t;
-            scratch.xs[k] = rays.ox[i] + rays.dx[i] * t;
-            scratch.ys[k] = rays.oy[i] + rays.dy[i] * t;
-            scratch.zs[k] = rays.oz[i] + rays.dz[i] * t;
-        }
-        eval.eval(
-            &scratch.xs[..m],
-            &scratch.ys[..m],
-            &scratch.zs[..m],
-            &mut scratch.ds[..m],
-        );
-        evals += m as u64;
+        evals += scratch.eval_active(eval, rays, |i| hits[i].t);
         step += 1;
         scratch.next.clear();
         for (k, &i) in scratch.active.iter().enumerate() {
@@ -178,21 +174,7 @@ pub fn shadow_march(
         .extend((0..n as u32).filter(|&i| start < tmax[i as usize]));
     let mut step = 0;
     while !scratch.active.is_empty() && step < s.shadow_max_steps {
-        let m = scratch.active.len();
-        scratch.gather(m);
-        for (k, &i) in scratch.active.iter().enumerate() {
-            let i = i as usize;
-            scratch.xs[k] = rays.ox[i] + rays.dx[i] * t[i];
-            scratch.ys[k] = rays.oy[i] + rays.dy[i] * t[i];
-            scratch.zs[k] = rays.oz[i] + rays.dz[i] * t[i];
-        }
-        eval.eval(
-            &scratch.xs[..m],
-            &scratch.ys[..m],
-            &scratch.zs[..m],
-            &mut scratch.ds[..m],
-        );
-        evals += m as u64;
+        evals += scratch.eval_active(eval, rays, |i| t[i]);
         step += 1;
         scratch.next.clear();
         for (k, &i) in scratch.active.iter().enumerate() {

@@ -91,10 +91,7 @@ fn sphere_depth_and_normals_match_ray_sphere_intersection() {
 
 #[test]
 fn relative_epsilon_still_finds_the_sphere() {
-    let s = scene(
-        SPHERE,
-        &["render.relative_epsilon=true", "render.hit_epsilon=1e-4"],
-    );
+    let s = scene(SPHERE, &["render.relative_epsilon=true", "render.hit_epsilon=1e-4"]);
     let (img, _) = render(&s, &aovs());
     let d = img.depth.unwrap();
     // The centre ray of a 64x48 image is between pixels; take pixel (32, 24) near the centre.
@@ -174,13 +171,8 @@ fn shadows_present_and_absent() {
         .find(|&k| img1.color[k][0] > 0.2 && img1.color[k][0] < 0.8)
         .expect("a penumbra pixel");
     assert!(img2.color[partial][0] < img1.color[partial][0]);
-    let (lit, _) = render(
-        &scene(SHADOW, &["render.shadows=\"none\""]),
-        &RenderOptions::default(),
-    );
-    let full: Vec<usize> = (0..33 * 33)
-        .filter(|&k| img1.color[k] == lit.color[k])
-        .collect();
+    let (lit, _) = render(&scene(SHADOW, &["render.shadows=\"none\""]), &RenderOptions::default());
+    let full: Vec<usize> = (0..33 * 33).filter(|&k| img1.color[k] == lit.color[k]).collect();
     assert!(!full.is_empty());
     for k in full {
         assert_eq!(img2.color[k], img1.color[k]);
@@ -220,15 +212,8 @@ fn antialiasing_gives_coverage() {
         "aa=1 has only inside/outside pixels"
     );
     let (soft, _) = render(&scene(DISC, &["render.aa=4"]), &RenderOptions::default());
-    let partial = soft
-        .color
-        .iter()
-        .filter(|c| c[0] > 0.05 && c[0] < 0.95)
-        .count();
-    assert!(
-        partial > 20,
-        "{partial} edge pixels with intermediate values"
-    );
+    let partial = soft.color.iter().filter(|c| c[0] > 0.05 && c[0] < 0.95).count();
+    assert!(partial > 20, "{partial} edge pixels with intermediate values");
     let covered: f64 = soft.color.iter().map(|c| c[0] as f64).sum();
     assert!(
         (covered - area).abs() / area < 0.01,
@@ -238,20 +223,10 @@ fn antialiasing_gives_coverage() {
 
 #[test]
 fn same_image_whatever_the_thread_count() {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../examples/showcase.toml"
-    ))
-    .unwrap();
-    let s = scene(
-        &text,
-        &["render.width=96", "render.height=54", "render.aa=2"],
-    );
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/showcase.toml")).unwrap();
+    let s = scene(&text, &["render.width=96", "render.height=54", "render.aa=2"]);
     let run = |n: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .unwrap();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
         pool.install(|| render(&s, &RenderOptions::default()).0)
     };
     let one = run(1);

@@ -80,12 +80,7 @@ pub fn from_toml(table: &DeTable<'_>, text: &str) -> Vec<Entry> {
         .map(|(k, v)| Entry {
             key: k.get_ref().to_string(),
             key_origin: Origin::File(span(k.span())),
-            value: convert(
-                v.get_ref(),
-                span(v.span()),
-                text,
-                Origin::File(span(v.span())),
-            ),
+            value: convert(v.get_ref(), span(v.span()), text, Origin::File(span(v.span()))),
         })
         .collect()
 }
@@ -153,11 +148,7 @@ pub fn convert(v: &DeValue<'_>, sp: Span, text: &str, origin: Origin) -> Located
 /// Escapes map all their decoded bytes to the escape's first byte.
 pub fn string_map(text: &str, sp: Span, content_len: usize) -> Vec<usize> {
     let raw = text.get(sp.start..sp.end).unwrap_or("");
-    let fallback = || {
-        (0..=content_len)
-            .map(|i| sp.start + 1 + i)
-            .collect::<Vec<_>>()
-    };
+    let fallback = || (0..=content_len).map(|i| sp.start + 1 + i).collect::<Vec<_>>();
     let (delim, literal) = if raw.starts_with("\"\"\"") {
         (3, false)
     } else if raw.starts_with("'''") {

@@ -84,13 +84,7 @@ impl Sources {
     }
 
     /// An error at a byte span of the file.
-    pub fn error_at(
-        &self,
-        span: Span,
-        message: &str,
-        label: Option<&str>,
-        notes: &[String],
-    ) -> SceneError {
+    pub fn error_at(&self, span: Span, message: &str, label: Option<&str>, notes: &[String]) -> SceneError {
         let (line, col) = line_col(&self.text, span.start);
         let rendered = render_snippet(&self.path, &self.text, span, message, label, notes);
         SceneError {

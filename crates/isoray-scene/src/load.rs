@@ -29,10 +29,7 @@ pub fn load_str(text: &str, name: &str, overrides: &[String]) -> Result<Scene> {
         overrides: overrides.to_vec(),
     };
     let table = DeTable::parse(text).map_err(|e| {
-        let span = e
-            .span()
-            .map(|r| Span::new(r.start, r.end))
-            .unwrap_or_default();
+        let span = e.span().map(|r| Span::new(r.start, r.end)).unwrap_or_default();
         let msg = e.message().trim().to_string();
         src.error_at(span, &format!("invalid TOML: {msg}"), None, &[])
     })?;
@@ -43,9 +40,7 @@ pub fn load_str(text: &str, name: &str, overrides: &[String]) -> Result<Scene> {
     build(&src, &root)
 }
 
-const TOP_KEYS: &[&str] = &[
-    "camera", "render", "light", "material", "surface", "object", "params",
-];
+const TOP_KEYS: &[&str] = &["camera", "render", "light", "material", "surface", "object", "params"];
 
 fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str) -> Result<()> {
     let origin = Origin::Override(index);
@@ -113,12 +108,15 @@ fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str
                 i += 1;
             }
             Item::Array(items) => {
-                let Some(idx_seg) = path.get(i + 1) else {
-                    unreachable!()
-                };
+                let Some(idx_seg) = path.get(i + 1) else { unreachable!() };
                 let n = items.len();
                 let Ok(idx) = idx_seg.parse::<usize>() else {
-                    return Err(src.error(origin, format!("`{seg}` is an array: expected an index after `{seg}.`, found `{idx_seg}`"), Some("expected an index"), &[format!("for example: --set {seg}.0.…")]));
+                    return Err(src.error(
+                        origin,
+                        format!("`{seg}` is an array: expected an index after `{seg}.`, found `{idx_seg}`"),
+                        Some("expected an index"),
+                        &[format!("for example: --set {seg}.0.…")],
+                    ));
                 };
                 let Some(elem) = items.get_mut(idx) else {
                     return Err(src.error(
@@ -151,11 +149,7 @@ fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str
                 let tn = other.type_name();
                 return Err(src.error(
                     origin,
-                    format!(
-                        "`{}` is {tn}, so it has no key `{}`",
-                        path[..=i].join("."),
-                        path[i + 1]
-                    ),
+                    format!("`{}` is {tn}, so it has no key `{}`", path[..=i].join("."), path[i + 1]),
                     Some("cannot set a key inside a value"),
                     &[],
                 ));
@@ -201,23 +195,13 @@ impl<'a> Reader<'a> {
     fn err(&self, v: &Located, key: &str, expected: &str) -> SceneError {
         self.src.error(
             v.origin,
-            format!(
-                "`{}.{key}`: expected {expected}, found {}",
-                self.ctx,
-                describe(&v.item)
-            ),
+            format!("`{}.{key}`: expected {expected}, found {}", self.ctx, describe(&v.item)),
             Some(&format!("expected {expected}")),
             &[],
         )
     }
 
-    fn num_in(
-        &mut self,
-        key: &str,
-        default: f64,
-        ok: impl Fn(f64) -> bool,
-        expected: &str,
-    ) -> Result<f64> {
+    fn num_in(&mut self, key: &str, default: f64, ok: impl Fn(f64) -> bool, expected: &str) -> Result<f64> {
         let Some(v) = self.get(key) else {
             return Ok(default);
         };
@@ -228,12 +212,7 @@ impl<'a> Reader<'a> {
     }
 
     fn positive(&mut self, key: &str, default: f64) -> Result<f64> {
-        self.num_in(
-            key,
-            default,
-            |x| x.is_finite() && x > 0.0,
-            "a positive number",
-        )
+        self.num_in(key, default, |x| x.is_finite() && x > 0.0, "a positive number")
     }
 
     fn non_negative(&mut self, key: &str, default: f64) -> Result<f64> {
@@ -591,10 +570,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 )?,
                 specular_function: r.choice(
                     "specular_function",
-                    &[
-                        ("pow", SpecularFunction::Pow),
-                        ("schlick", SpecularFunction::Schlick),
-                    ],
+                    &[("pow", SpecularFunction::Pow), ("schlick", SpecularFunction::Schlick)],
                     d.specular_function,
                 )?,
             };
@@ -621,11 +597,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         let Some((loc, map)) = snips.get(d.source) else {
             return src.error(Origin::Implicit, d.message.clone(), None, &d.notes);
         };
-        let at = |i: usize| {
-            map.get(i)
-                .copied()
-                .unwrap_or_else(|| map.last().copied().unwrap_or(0))
-        };
+        let at = |i: usize| map.get(i).copied().unwrap_or_else(|| map.last().copied().unwrap_or(0));
         match loc.origin {
             Origin::File(_) => {
                 let span = Span::new(at(d.span.start), at(d.span.end.max(d.span.start)));
@@ -701,7 +673,12 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
             }
             for other in ["implicit", "parametric"] {
                 if let Some(ov) = r.get(other) {
-                    return Err(src.error(ov.origin, format!("`{ctx}.{other}`: only `sdf` surfaces are supported by this version of isoray"), Some("not supported yet"), &[]));
+                    return Err(src.error(
+                        ov.origin,
+                        format!("`{ctx}.{other}`: only `sdf` surfaces are supported by this version of isoray"),
+                        Some("not supported yet"),
+                        &[],
+                    ));
                 }
             }
             let Some((text, loc)) = r.string("sdf")? else {
@@ -713,9 +690,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 ));
             };
             r.finish(&["params", "sdf"])?;
-            let Item::Str(_, map) = &loc.item else {
-                unreachable!()
-            };
+            let Item::Str(_, map) = &loc.item else { unreachable!() };
             let id = snippets.len();
             snippets.push((loc, map));
             lib.add_surface(&e.key, sparams, text, id)
@@ -753,10 +728,8 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     Some((m, loc)) => match materials.iter().position(|x| x.name == m) {
                         Some(k) => k,
                         None => {
-                            let names: Vec<&str> =
-                                materials.iter().map(|x| x.name.as_str()).collect();
-                            let mut notes =
-                                vec![format!("defined materials: {}", names.join(", "))];
+                            let names: Vec<&str> = materials.iter().map(|x| x.name.as_str()).collect();
+                            let mut notes = vec![format!("defined materials: {}", names.join(", "))];
                             if let Some(s) = suggest(m, names.iter().copied()) {
                                 notes.insert(0, format!("did you mean \"{s}\"?"));
                             }
@@ -778,9 +751,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     ));
                 };
                 r.finish(&["name", "material", "shape"])?;
-                let Item::Str(_, map) = &loc.item else {
-                    unreachable!()
-                };
+                let Item::Str(_, map) = &loc.item else { unreachable!() };
                 let id = snippets.len();
                 snippets.push((loc, map));
                 let node = lib
@@ -851,12 +822,7 @@ pub const RENDER_KEYS: &[&str] = &[
 ];
 
 /// min(a,b) − max(k−|a−b|,0)²/(4k), or min(a, b) when k = 0.
-fn smooth_union(
-    b: &mut Builder,
-    x: isoray_shape::Node,
-    y: isoray_shape::Node,
-    k: f64,
-) -> isoray_shape::Node {
+fn smooth_union(b: &mut Builder, x: isoray_shape::Node, y: isoray_shape::Node, k: f64) -> isoray_shape::Node {
     if k <= 0.0 {
         return b.min(x, y);
     }
@@ -873,10 +839,7 @@ fn smooth_union(
 }
 
 fn check_name(src: &Sources, name: &str, origin: Origin) -> Result<()> {
-    let ok = name
-        .chars()
-        .next()
-        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+    let ok = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
         && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
     if !ok || isoray_shape::syntax::KEYWORDS.contains(&name) || name == "p" {
         return Err(src.error(

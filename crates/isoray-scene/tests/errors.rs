@@ -46,16 +46,11 @@ fn shape_errors_point_into_the_toml_string() {
     // The caret starts at `p + vec2(...)`, column 17 of line 2.
     assert_eq!(e.column, Some(17), "{e}");
     assert!(e.message.contains("cannot add `vec3` and `vec2`"), "{e}");
-    assert!(
-        e.rendered
-            .contains(&format!("{} vec3 + vec2", "^".repeat(18))),
-        "{e}"
-    );
+    assert!(e.rendered.contains(&format!("{} vec3 + vec2", "^".repeat(18))), "{e}");
 
     let e = err("[[object]]\nshape = \"sphre(p, 1.0)\"\n");
     assert!(
-        e.message.contains("unknown function `sphre`")
-            && e.rendered.contains("did you mean `sphere`?"),
+        e.message.contains("unknown function `sphre`") && e.rendered.contains("did you mean `sphere`?"),
         "{e}"
     );
     let e = err("[[object]]\nshape = \"sphere(p, 1.0, 2.0)\"\n");
@@ -72,13 +67,8 @@ fn surface_errors_and_user_primitives() {
     assert!((s.distance([2.25, 0.0, 0.0])).abs() < 1e-12);
     let e = err("[surface.ring]\nsdf = \"length(p.xw)\"\n[[object]]\nshape = \"ring(p)\"\n");
     assert_eq!(e.line, Some(2));
-    assert!(
-        e.message.contains("`.w`") || e.message.contains("component"),
-        "{e}"
-    );
-    let e = err(
-        "[surface.a]\nsdf = \"b(p)\"\n[surface.b]\nsdf = \"a(p)\"\n[[object]]\nshape = \"a(p)\"\n",
-    );
+    assert!(e.message.contains("`.w`") || e.message.contains("component"), "{e}");
+    let e = err("[surface.a]\nsdf = \"b(p)\"\n[surface.b]\nsdf = \"a(p)\"\n[[object]]\nshape = \"a(p)\"\n");
     assert!(e.message.contains("calls itself"), "{e}");
 }
 
@@ -86,11 +76,11 @@ fn surface_errors_and_user_primitives() {
 fn semantic_errors() {
     let e = err("[[object]]\nmaterial = \"gld\"\nshape = \"sphere(p, 1.0)\"\n[material.gold]\n");
     assert!(
-        e.message.contains("no material named \"gld\"")
-            && e.rendered.contains("did you mean \"gold\"?"),
+        e.message.contains("no material named \"gld\"") && e.rendered.contains("did you mean \"gold\"?"),
         "{e}"
     );
-    let e = err("[camera]\nposition = [0.0, 0.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
+    let e =
+        err("[camera]\nposition = [0.0, 0.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
     assert!(e.message.contains("no direction"), "{e}");
     let e = err("[render]\nwidth = 10\n");
     assert!(e.message.contains("no objects"), "{e}");
@@ -117,10 +107,7 @@ fn overrides() {
     let s = load_str(
         text,
         "s.toml",
-        &[
-            "object.0.shape=sphere(p, 2.0)".into(),
-            "params.k=0.5".into(),
-        ],
+        &["object.0.shape=sphere(p, 2.0)".into(), "params.k=0.5".into()],
     )
     .unwrap();
     assert!((s.distance([3.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
@@ -178,9 +165,6 @@ fn garbage_never_panics() {
         "[[object]]\nshape = \"sphere(p, 1.0)\"\n[params]\nk = [1]\n",
     ];
     for s in samples {
-        assert!(
-            load_str(s, "g.toml", &[]).is_err(),
-            "{s:?} should be rejected"
-        );
+        assert!(load_str(s, "g.toml", &[]).is_err(), "{s:?} should be rejected");
     }
 }

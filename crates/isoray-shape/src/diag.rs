@@ -125,10 +125,7 @@ pub fn render_snippet(
     out.push_str(&format!("{line} | {line_text}\n"));
     // Caret run: from col to the end of the span, clipped to this line.
     let line_start = span.start + 1 - col.min(span.start + 1);
-    let caret_start: usize = text
-        .get(line_start..span.start)
-        .map(|s| s.chars().count())
-        .unwrap_or(0);
+    let caret_start: usize = text.get(line_start..span.start).map(|s| s.chars().count()).unwrap_or(0);
     let line_end = line_start + line_text.len();
     let span_end = span.end.clamp(span.start, line_end.max(span.start));
     let caret_len = text
@@ -207,14 +204,7 @@ mod tests {
     fn caret_under_span() {
         let t = "x = 1\nshape = \"foo(p)\"\n";
         let start = t.find("foo").unwrap();
-        let r = render_snippet(
-            "s.toml",
-            t,
-            Span::new(start, start + 3),
-            "unknown",
-            Some("here"),
-            &[],
-        );
+        let r = render_snippet("s.toml", t, Span::new(start, start + 3), "unknown", Some("here"), &[]);
         assert!(r.contains("--> s.toml:2:10"), "{r}");
         assert!(r.contains("  |          ^^^ here"), "{r}");
     }

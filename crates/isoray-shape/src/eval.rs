@@ -9,7 +9,7 @@
 //! * [`gradient`] and [`BatchEvaluator::gradients`] give the gradient by
 //!   automatic differentiation or by finite differences ([`GradientMode`]).
 
-use crate::ir::{apply_binary, apply_unary, sign, BinOp, Instr, Tape, UnOp};
+use crate::ir::{apply_binary, apply_unary, BinOp, Instr, Tape, UnOp};
 
 /// Number of points a [`BatchEvaluator`] processes per pass over the tape.
 pub const LANES: usize = 64;
@@ -49,45 +49,10 @@ impl Num for f32 {
         self as f64
     }
     fn unary(op: UnOp, a: Self) -> Self {
-        unary_f32(op, a)
+        apply_unary(op, a)
     }
     fn binary(op: BinOp, a: Self, b: Self) -> Self {
-        binary_f32(op, a, b)
-    }
-}
-
-#[inline(always)]
-fn unary_f32(op: UnOp, x: f32) -> f32 {
-    match op {
-        UnOp::Neg => -x,
-        UnOp::Abs => x.abs(),
-        UnOp::Sqrt => x.sqrt(),
-        UnOp::Square => x * x,
-        UnOp::Sin => x.sin(),
-        UnOp::Cos => x.cos(),
-        UnOp::Tan => x.tan(),
-        UnOp::Asin => x.asin(),
-        UnOp::Acos => x.acos(),
-        UnOp::Atan => x.atan(),
-        UnOp::Exp => x.exp(),
-        UnOp::Ln => x.ln(),
-        UnOp::Floor => x.floor(),
-        UnOp::Round => x.round(),
-        UnOp::Sign => sign(x as f64) as f32,
-    }
-}
-
-#[inline(always)]
-fn binary_f32(op: BinOp, a: f32, b: f32) -> f32 {
-    match op {
-        BinOp::Add => a + b,
-        BinOp::Sub => a - b,
-        BinOp::Mul => a * b,
-        BinOp::Div => a / b,
-        BinOp::Min => a.min(b),
-        BinOp::Max => a.max(b),
-        BinOp::Pow => a.powf(b),
-        BinOp::Atan2 => a.atan2(b),
+        apply_binary(op, a, b)
     }
 }
 
@@ -176,11 +141,7 @@ impl Num for Dual {
                 }
             }
             BinOp::Pow => {
-                let ka = if b.v == 0.0 {
-                    0.0
-                } else {
-                    b.v * a.v.powf(b.v - 1.0)
-                };
+                let ka = if b.v == 0.0 { 0.0 } else { b.v * a.v.powf(b.v - 1.0) };
                 let kb = if a.v > 0.0 { v * a.v.ln() } else { 0.0 };
                 lin(ka, kb)
             }
@@ -223,9 +184,7 @@ impl<'t, T: Num> PointEvaluator<'t, T> {
         for ins in self.tape.instrs() {
             match *ins {
                 Instr::Unary { op, out, a } => s[out as usize] = T::unary(op, s[a as usize]),
-                Instr::Binary { op, out, a, b } => {
-                    s[out as usize] = T::binary(op, s[a as usize], s[b as usize])
-                }
+                Instr::Binary { op, out, a, b } => s[out as usize] = T::binary(op, s[a as usize], s[b as usize]),
                 Instr::Select { out, c, a, b } => {
                     s[out as usize] = if s[c as usize].value() > 0.0 {
                         s[a as usize]
@@ -253,12 +212,7 @@ pub enum GradientMode {
 }
 
 /// The four tetrahedron directions (±1, ±1, ±1) with an odd number of minus signs.
-pub const TETRAHEDRON: [[f64; 3]; 4] = [
-    [1.0, -1.0, -1.0],
-    [-1.0, -1.0, 1.0],
-    [-1.0, 1.0, -1.0],
-    [1.0, 1.0, 1.0],
-];
+pub const TETRAHEDRON: [[f64; 3]; 4] = [[1.0, -1.0, -1.0], [-1.0, -1.0, 1.0], [-1.0, 1.0, -1.0], [1.0, 1.0, 1.0]];
 
 /// The offsets (relative to the point, in units of h) at which a finite
 /// difference mode samples, and the weights turning samples into ∂/∂x,y,z:
@@ -464,11 +418,7 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
         }
         for (o, w) in stencil(mode) {
             let [sx, sy, sz, sf] = &mut scratch;
-            let (ox, oy, oz) = (
-                T::from_f64(h * o[0]),
-                T::from_f64(h * o[1]),
-                T::from_f64(h * o[2]),
-            );
+            let (ox, oy, oz) = (T::from_f64(h * o[0]), T::from_f64(h * o[1]), T::from_f64(h * o[2]));
             for i in 0..n {
                 sx[i] = xs[i] + ox;
                 sy[i] = ys[i] + oy;

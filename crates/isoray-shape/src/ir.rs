@@ -114,8 +114,9 @@ impl Op {
 }
 
 /// Applies a unary operation to a number (the reference semantics every
-/// evaluator follows).
-pub fn apply_unary(op: UnOp, x: f64) -> f64 {
+/// evaluator follows, in f32 or f64).
+#[inline(always)]
+pub fn apply_unary<T: num_traits::Float>(op: UnOp, x: T) -> T {
     match op {
         UnOp::Neg => -x,
         UnOp::Abs => x.abs(),
@@ -136,18 +137,20 @@ pub fn apply_unary(op: UnOp, x: f64) -> f64 {
 }
 
 /// GLSL `sign`: −1, 0 or 1 (NaN stays NaN).
-pub fn sign(x: f64) -> f64 {
-    if x > 0.0 {
-        1.0
-    } else if x < 0.0 {
-        -1.0
+#[inline(always)]
+pub fn sign<T: num_traits::Float>(x: T) -> T {
+    if x > T::zero() {
+        T::one()
+    } else if x < T::zero() {
+        -T::one()
     } else {
         x
     }
 }
 
 /// Applies a binary operation to numbers.
-pub fn apply_binary(op: BinOp, a: f64, b: f64) -> f64 {
+#[inline(always)]
+pub fn apply_binary<T: num_traits::Float>(op: BinOp, a: T, b: T) -> T {
     match op {
         BinOp::Add => a + b,
         BinOp::Sub => a - b,
@@ -232,13 +235,9 @@ impl Builder {
         }
         match (op, self.op(a)) {
             (UnOp::Neg, Op::Unary(UnOp::Neg, inner)) => return inner,
-            (UnOp::Abs, Op::Unary(UnOp::Abs | UnOp::Square | UnOp::Sqrt | UnOp::Exp, _)) => {
-                return a
-            }
+            (UnOp::Abs, Op::Unary(UnOp::Abs | UnOp::Square | UnOp::Sqrt | UnOp::Exp, _)) => return a,
             (UnOp::Abs, Op::Unary(UnOp::Neg, inner)) => return self.unary(UnOp::Abs, inner),
-            (UnOp::Square, Op::Unary(UnOp::Neg | UnOp::Abs, inner)) => {
-                return self.unary(UnOp::Square, inner)
-            }
+            (UnOp::Square, Op::Unary(UnOp::Neg | UnOp::Abs, inner)) => return self.unary(UnOp::Square, inner),
             _ => {}
         }
         self.intern(Op::Unary(op, a))
@@ -297,8 +296,7 @@ impl Builder {
                 // Division by a constant power of two is exact as a multiplication.
                 if let Some(y) = cb {
                     let r = 1.0 / y;
-                    if y != 0.0 && r.is_finite() && (r * y == 1.0) && y.abs().log2().fract() == 0.0
-                    {
+                    if y != 0.0 && r.is_finite() && (r * y == 1.0) && y.abs().log2().fract() == 0.0 {
                         let rc = self.constant(r);
                         return self.binary(BinOp::Mul, a, rc);
                     }
@@ -519,12 +517,8 @@ impl Tape {
         }
         let mut free: Vec<u32> = Vec::new();
         let mut instrs = Vec::new();
-        let is_temp = |ops: &[Op], m: Node| {
-            matches!(
-                ops[m.0 as usize],
-                Op::Unary(..) | Op::Binary(..) | Op::Select(..)
-            )
-        };
+        let is_temp =
+            |ops: &[Op], m: Node| matches!(ops[m.0 as usize], Op::Unary(..) | Op::Binary(..) | Op::Select(..));
         for i in 0..n {
             if !needed[i] || !is_temp(ops, Node(i as u32)) {
                 continue;

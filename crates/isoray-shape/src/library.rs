@@ -174,11 +174,7 @@ pub fn signature_text(s: &Signature) -> String {
                 P | V => "vec3",
                 G => "float|vec2|vec3",
             };
-            let opt = if i >= s.params.len() - s.optional {
-                "?"
-            } else {
-                ""
-            };
+            let opt = if i >= s.params.len() - s.optional { "?" } else { "" };
             format!("{n}{opt}: {t}")
         })
         .collect();
@@ -191,12 +187,7 @@ pub fn signature_text(s: &Signature) -> String {
 }
 
 /// Lowers a call of a built-in; `None` when `name` is not one.
-pub(crate) fn call(
-    l: &mut Lowerer,
-    name: &str,
-    span: Span,
-    args: &[Arg],
-) -> Option<Result<Val, Diagnostic>> {
+pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Option<Result<Val, Diagnostic>> {
     match name {
         "vec2" | "vec3" => return Some(construct(l, name, span, args)),
         "float" => {
@@ -204,10 +195,7 @@ pub(crate) fn call(
                 [a] if a.v.ty == Type::Float => Ok(a.v),
                 [a] => Ok(Val::float(a.v.c[0])),
                 _ => Err(l
-                    .err(
-                        span,
-                        format!("`float` takes 1 argument, found {}", args.len()),
-                    )
+                    .err(span, format!("`float` takes 1 argument, found {}", args.len()))
                     .with_label("wrong number of arguments")),
             })
         }
@@ -218,10 +206,7 @@ pub(crate) fn call(
                     return Some(Err(l
                         .err(
                             a.span,
-                            format!(
-                                "`{name}` combines distances: expected `float`, found `{}`",
-                                a.v.ty
-                            ),
+                            format!("`{name}` combines distances: expected `float`, found `{}`", a.v.ty),
                         )
                         .with_note(format!("signature: {}", signature_text(one)))));
                 }
@@ -242,8 +227,7 @@ pub(crate) fn call(
     if sigs.is_empty() {
         return None;
     }
-    let fits =
-        |s: &&&Signature| args.len() <= s.params.len() && args.len() + s.optional >= s.params.len();
+    let fits = |s: &&&Signature| args.len() <= s.params.len() && args.len() + s.optional >= s.params.len();
     let Some(sig) = sigs.iter().find(fits) else {
         let all: Vec<String> = sigs.iter().map(|s| signature_text(s)).collect();
         let want = sigs
@@ -258,10 +242,7 @@ pub(crate) fn call(
             .collect::<Vec<_>>()
             .join(" or ");
         return Some(Err(l
-            .err(
-                span,
-                format!("`{name}` takes {want} argument(s), found {}", args.len()),
-            )
+            .err(span, format!("`{name}` takes {want} argument(s), found {}", args.len()))
             .with_label("wrong number of arguments")
             .with_note(format!("signature: {}", all.join("  or  ")))));
     };
@@ -286,9 +267,8 @@ fn check(l: &mut Lowerer, sig: &Signature, args: &[Arg]) -> Result<Vec<Val>, Dia
         let v = match kind {
             F if a.v.ty != Type::Float => return Err(mismatch(l, a, pname, "a `float`")),
             P if a.v.ty != Type::Vec3 => {
-                return Err(mismatch(l, a, pname, "a `vec3` point").with_note(
-                    "primitives take the point first, e.g. `sphere(p - vec3(1.0, 0.0, 0.0), 0.5)`",
-                ))
+                return Err(mismatch(l, a, pname, "a `vec3` point")
+                    .with_note("primitives take the point first, e.g. `sphere(p - vec3(1.0, 0.0, 0.0), 0.5)`"))
             }
             V if a.v.ty == Type::Vec2 => {
                 return Err(mismatch(
@@ -303,7 +283,13 @@ fn check(l: &mut Lowerer, sig: &Signature, args: &[Arg]) -> Result<Vec<Val>, Dia
                 if let Some((t, s)) = generic {
                     if t != a.v.ty {
                         return Err(l
-                            .err(a.span, format!("argument `{pname}` of `{}` is a `{}` but an earlier argument is a `{t}`", sig.name, a.v.ty))
+                            .err(
+                                a.span,
+                                format!(
+                                    "argument `{pname}` of `{}` is a `{}` but an earlier argument is a `{t}`",
+                                    sig.name, a.v.ty
+                                ),
+                            )
                             .with_label(format!("expected {t} or float"))
                             .with_note(format!("the `{t}` argument starts at byte {}", s.start)));
                     }
@@ -337,10 +323,7 @@ fn construct(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Result<Va
         return Err(l
             .err(
                 span,
-                format!(
-                    "`{name}` needs {want} components in total, found {}",
-                    comps.len()
-                ),
+                format!("`{name}` needs {want} components in total, found {}", comps.len()),
             )
             .with_label("wrong number of components")
             .with_note(format!(
@@ -500,11 +483,7 @@ fn lower(l: &mut Lowerer, sig: &Signature, a: &[Val]) -> Val {
             f(l.b.max(a[0].s(), nb))
         }
         ("smooth_union" | "smooth_intersection" | "smooth_difference", _) => {
-            let n = if a.len() > 3 {
-                a[3].s()
-            } else {
-                l.b.constant(2.0)
-            };
+            let n = if a.len() > 3 { a[3].s() } else { l.b.constant(2.0) };
             let (x, mut y, k) = (a[0].s(), a[1].s(), a[2].s());
             if name == "smooth_difference" {
                 y = l.b.neg(y);
@@ -513,14 +492,7 @@ fn lower(l: &mut Lowerer, sig: &Signature, a: &[Val]) -> Val {
         }
         ("smin_cubic", _) => {
             let three = l.b.constant(3.0);
-            f(smooth_minmax(
-                l.b,
-                a[0].s(),
-                a[1].s(),
-                a[2].s(),
-                three,
-                true,
-            ))
+            f(smooth_minmax(l.b, a[0].s(), a[1].s(), a[2].s(), three, true))
         }
         ("smin_exp", _) => f(smin_exp(l.b, a[0].s(), a[1].s(), a[2].s())),
         ("smin_pow", _) => f(smin_pow(l.b, a[0].s(), a[1].s(), a[2].s())),

@@ -104,23 +104,13 @@ impl Library {
     }
 
     /// Compiles shape text to a DAG node in `b` (the signed distance at `p`).
-    pub fn compile(
-        &self,
-        b: &mut Builder,
-        text: &str,
-        source: SourceId,
-    ) -> Result<Node, Diagnostic> {
+    pub fn compile(&self, b: &mut Builder, text: &str, source: SourceId) -> Result<Node, Diagnostic> {
         let program = parse(text, source)?;
         self.compile_program(b, &program, source)
     }
 
     /// Compiles an already parsed program.
-    pub fn compile_program(
-        &self,
-        b: &mut Builder,
-        program: &Program,
-        source: SourceId,
-    ) -> Result<Node, Diagnostic> {
+    pub fn compile_program(&self, b: &mut Builder, program: &Program, source: SourceId) -> Result<Node, Diagnostic> {
         let mut l = Lowerer::new(b, self, source);
         let p = l.point();
         l.scope.push(("p".to_string(), p));
@@ -129,15 +119,10 @@ impl Library {
             return Err(Diagnostic::new(
                 source,
                 program.body.span,
-                format!(
-                    "a shape must be a `float` distance, but this is a `{}`",
-                    v.ty
-                ),
+                format!("a shape must be a `float` distance, but this is a `{}`", v.ty),
             )
             .with_label(format!("this is a {}", v.ty))
-            .with_note(
-                "call a primitive such as `sphere(p, 1.0)`, or take a component such as `.x`",
-            ));
+            .with_note("call a primitive such as `sphere(p, 1.0)`, or take a component such as `.x`"));
         }
         Ok(v.s())
     }
@@ -200,10 +185,7 @@ impl<'a> Lowerer<'a> {
                     return Err(self
                         .err(
                             l.value.span,
-                            format!(
-                                "`{}` is declared `{}` but its value is a `{}`",
-                                l.name, want, v.ty
-                            ),
+                            format!("`{}` is declared `{}` but its value is a `{}`", l.name, want, v.ty),
                         )
                         .with_label(format!("this is a {}", v.ty))
                         .with_note(format!("the declaration is at byte {}", span.start)));
@@ -217,20 +199,14 @@ impl<'a> Lowerer<'a> {
     }
 
     fn lookup(&self, name: &str) -> Option<Val> {
-        self.scope
-            .iter()
-            .rev()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| *v)
+        self.scope.iter().rev().find(|(n, _)| n == name).map(|(_, v)| *v)
     }
 
     pub(crate) fn expr(&mut self, e: &Expr) -> Result<Val, Diagnostic> {
         if self.depth >= MAX_LOWER_DEPTH {
-            return Err(self
-                .err(e.span, "expression nested too deeply")
-                .with_label(format!(
-                    "more than {MAX_LOWER_DEPTH} levels, counting surfaces called inside surfaces"
-                )));
+            return Err(self.err(e.span, "expression nested too deeply").with_label(format!(
+                "more than {MAX_LOWER_DEPTH} levels, counting surfaces called inside surfaces"
+            )));
         }
         self.depth += 1;
         let r = self.expr_inner(e);
@@ -281,9 +257,7 @@ impl<'a> Lowerer<'a> {
                     return Err(self
                         .err(e.span, format!("cannot {verb} `{}` and `{}`", va.ty, vb.ty))
                         .with_label(format!("{} {} {}", va.ty, op.symbol(), vb.ty))
-                        .with_note(
-                            "both sides must have the same type, or one side must be a float",
-                        ));
+                        .with_note("both sides must have the same type, or one side must be a float"));
                 }
                 let f = match op {
                     BinaryOp::Add => Builder::add,
@@ -297,11 +271,7 @@ impl<'a> Lowerer<'a> {
                 let v = self.expr(a)?;
                 self.swizzle(v, comps, e.span)
             }
-            ExprKind::Call {
-                name,
-                name_span,
-                args,
-            } => {
+            ExprKind::Call { name, name_span, args } => {
                 let mut lowered = Vec::with_capacity(args.len());
                 for a in args {
                     lowered.push(Arg {
@@ -317,18 +287,12 @@ impl<'a> Lowerer<'a> {
     fn swizzle(&mut self, v: Val, comps: &str, span: Span) -> Result<Val, Diagnostic> {
         if v.ty == Type::Float {
             return Err(self
-                .err(
-                    span,
-                    format!("cannot take components `.{comps}` of a `float`"),
-                )
+                .err(span, format!("cannot take components `.{comps}` of a `float`"))
                 .with_label("a float has no components"));
         }
         if comps.is_empty() || comps.len() > 3 {
             return Err(self
-                .err(
-                    span,
-                    format!("a swizzle takes 1 to 3 components, found `.{comps}`"),
-                )
+                .err(span, format!("a swizzle takes 1 to 3 components, found `.{comps}`"))
                 .with_label("expected e.g. `.x`, `.xz` or `.zyx`"));
         }
         let mut out = Vec::new();
@@ -339,10 +303,7 @@ impl<'a> Lowerer<'a> {
                 'z' | 'b' | 'p' => 2,
                 _ => {
                     return Err(self
-                        .err(
-                            span,
-                            format!("`{ch}` is not a component name in `.{comps}`"),
-                        )
+                        .err(span, format!("`{ch}` is not a component name in `.{comps}`"))
                         .with_label("components are x, y, z (or r, g, b)"))
                 }
             };
@@ -366,12 +327,7 @@ impl<'a> Lowerer<'a> {
     }
 
     /// Applies `f` componentwise; a float operand broadcasts.
-    pub(crate) fn map2(
-        &mut self,
-        a: Val,
-        b: Val,
-        f: impl Fn(&mut Builder, Node, Node) -> Node,
-    ) -> Val {
+    pub(crate) fn map2(&mut self, a: Val, b: Val, f: impl Fn(&mut Builder, Node, Node) -> Node) -> Val {
         let ty = if a.ty == Type::Float { b.ty } else { a.ty };
         let mut c = [a.c[0]; 3];
         for (i, ci) in c.iter_mut().enumerate().take(ty.width()) {
@@ -381,13 +337,7 @@ impl<'a> Lowerer<'a> {
     }
 
     /// Applies `f` componentwise over three operands with broadcasting.
-    pub(crate) fn map3(
-        &mut self,
-        a: Val,
-        b: Val,
-        c3: Val,
-        f: impl Fn(&mut Builder, Node, Node, Node) -> Node,
-    ) -> Val {
+    pub(crate) fn map3(&mut self, a: Val, b: Val, c3: Val, f: impl Fn(&mut Builder, Node, Node, Node) -> Node) -> Val {
         let ty = [a.ty, b.ty, c3.ty]
             .into_iter()
             .find(|t| *t != Type::Float)
@@ -399,13 +349,7 @@ impl<'a> Lowerer<'a> {
         Val { ty, c }
     }
 
-    fn call(
-        &mut self,
-        name: &str,
-        name_span: Span,
-        span: Span,
-        args: &[Arg],
-    ) -> Result<Val, Diagnostic> {
+    fn call(&mut self, name: &str, name_span: Span, span: Span, args: &[Arg]) -> Result<Val, Diagnostic> {
         if let Some(s) = self.lib.surfaces.get(name) {
             return self.call_surface(s, name_span, span, args);
         }
@@ -423,13 +367,7 @@ impl<'a> Lowerer<'a> {
         Err(d)
     }
 
-    fn call_surface(
-        &mut self,
-        s: &Surface,
-        name_span: Span,
-        span: Span,
-        args: &[Arg],
-    ) -> Result<Val, Diagnostic> {
+    fn call_surface(&mut self, s: &Surface, name_span: Span, span: Span, args: &[Arg]) -> Result<Val, Diagnostic> {
         let sig = std::iter::once("p: vec3".to_string())
             .chain(
                 s.params
@@ -476,10 +414,7 @@ impl<'a> Lowerer<'a> {
                         return Err(self
                             .err(
                                 a.span,
-                                format!(
-                                    "parameter `{pname}` of `{}` is a `{want}`, found `{}`",
-                                    s.name, a.v.ty
-                                ),
+                                format!("parameter `{pname}` of `{}` is a `{want}`, found `{}`", s.name, a.v.ty),
                             )
                             .with_label(format!("expected {want}"))
                             .with_note(format!("signature: {}({sig})", s.name)));
@@ -506,13 +441,7 @@ impl<'a> Lowerer<'a> {
         self.inline_surface(s, args[0].v, &vals, name_span)
     }
 
-    fn inline_surface(
-        &mut self,
-        s: &Surface,
-        p: Val,
-        params: &[Val],
-        _span: Span,
-    ) -> Result<Val, Diagnostic> {
+    fn inline_surface(&mut self, s: &Surface, p: Val, params: &[Val], _span: Span) -> Result<Val, Diagnostic> {
         let saved_scope = std::mem::take(&mut self.scope);
         let saved_source = self.source;
         self.source = s.source;
@@ -530,10 +459,7 @@ impl<'a> Lowerer<'a> {
             return Err(Diagnostic::new(
                 s.source,
                 s.program.body.span,
-                format!(
-                    "surface `{}` must give a `float` distance, found `{}`",
-                    s.name, v.ty
-                ),
+                format!("surface `{}` must give a `float` distance, found `{}`", s.name, v.ty),
             )
             .with_label(format!("this is a {}", v.ty)));
         }

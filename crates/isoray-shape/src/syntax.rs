@@ -61,12 +61,10 @@ pub fn lex(text: &str, source: SourceId) -> Result<Vec<Token>, Diagnostic> {
             i += 2;
             loop {
                 if i + 1 >= bytes.len() {
-                    return Err(Diagnostic::new(
-                        source,
-                        Span::new(start, start + 2),
-                        "unterminated comment",
-                    )
-                    .with_label("this `/*` is never closed with `*/`"));
+                    return Err(
+                        Diagnostic::new(source, Span::new(start, start + 2), "unterminated comment")
+                            .with_label("this `/*` is never closed with `*/`"),
+                    );
                 }
                 if bytes[i] == b'*' && bytes[i + 1] == b'/' {
                     i += 2;
@@ -77,8 +75,7 @@ pub fn lex(text: &str, source: SourceId) -> Result<Vec<Token>, Diagnostic> {
             continue;
         }
         let start = i;
-        if c.is_ascii_digit() || (c == b'.' && bytes.get(i + 1).is_some_and(|b| b.is_ascii_digit()))
-        {
+        if c.is_ascii_digit() || (c == b'.' && bytes.get(i + 1).is_some_and(|b| b.is_ascii_digit())) {
             while i < bytes.len() && (bytes[i].is_ascii_digit() || bytes[i] == b'.') {
                 i += 1;
             }
@@ -106,10 +103,7 @@ pub fn lex(text: &str, source: SourceId) -> Result<Vec<Token>, Diagnostic> {
                 Diagnostic::new(source, span, format!("malformed number `{lit}`"))
                     .with_label("expected a number like 1, 0.5 or 2.5e-3")
             })?;
-            out.push(Token {
-                tok: Tok::Num(v),
-                span,
-            });
+            out.push(Token { tok: Tok::Num(v), span });
             continue;
         }
         if c.is_ascii_alphabetic() || c == b'_' {
@@ -331,9 +325,7 @@ impl Parser<'_> {
                 None
             } else {
                 let t = self.bump();
-                let Tok::Ident(s) = &t.tok else {
-                    unreachable!()
-                };
+                let Tok::Ident(s) = &t.tok else { unreachable!() };
                 TypeName::from_ident(s).map(|ty| (ty, t.span))
             };
             let name_tok = self.bump();
@@ -341,10 +333,7 @@ impl Parser<'_> {
                 return Err(Diagnostic::new(
                     self.source,
                     name_tok.span,
-                    format!(
-                        "expected a name after `let`, found {}",
-                        describe(&name_tok.tok)
-                    ),
+                    format!("expected a name after `let`, found {}", describe(&name_tok.tok)),
                 )
                 .with_label("expected a name"));
             };
@@ -368,10 +357,7 @@ impl Parser<'_> {
                         return Err(Diagnostic::new(
                             self.source,
                             t.span,
-                            format!(
-                                "expected a type (`float`, `vec2` or `vec3`), found {}",
-                                describe(other)
-                            ),
+                            format!("expected a type (`float`, `vec2` or `vec3`), found {}", describe(other)),
                         )
                         .with_label("expected a type"))
                     }
@@ -413,10 +399,7 @@ impl Parser<'_> {
     fn expr(&mut self) -> Result<Expr, Diagnostic> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            return Err(self.err(
-                "expression nested too deeply",
-                format!("more than {MAX_DEPTH} levels"),
-            ));
+            return Err(self.err("expression nested too deeply", format!("more than {MAX_DEPTH} levels")));
         }
         let r = self.additive();
         self.depth -= 1;
@@ -424,35 +407,30 @@ impl Parser<'_> {
     }
 
     fn additive(&mut self) -> Result<Expr, Diagnostic> {
-        let mut lhs = self.term()?;
-        let mut chain = 0;
-        loop {
-            chain += 1;
-            if chain > MAX_CHAIN {
-                return Err(self.err(
-                    "expression too long",
-                    format!("more than {MAX_CHAIN} operators in a row; use `let` bindings"),
-                ));
-            }
-            let op = match self.peek().tok {
-                Tok::Punct('+') => BinaryOp::Add,
-                Tok::Punct('-') => BinaryOp::Sub,
-                _ => return Ok(lhs),
-            };
-            self.bump();
-            let rhs = self.term()?;
-            let span = lhs.span.to(rhs.span);
-            lhs = Expr {
-                kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)),
-                span,
-            };
-        }
+        self.binary_level(Self::term, |t| match t {
+            Tok::Punct('+') => Some(BinaryOp::Add),
+            Tok::Punct('-') => Some(BinaryOp::Sub),
+            _ => None,
+        })
     }
 
     fn term(&mut self) -> Result<Expr, Diagnostic> {
-        let mut lhs = self.unary()?;
+        self.binary_level(Self::unary, |t| match t {
+            Tok::Punct('*') => Some(BinaryOp::Mul),
+            Tok::Punct('/') => Some(BinaryOp::Div),
+            _ => None,
+        })
+    }
+
+    /// One left-associative precedence level: `operand (op operand)*`.
+    fn binary_level(
+        &mut self,
+        operand: fn(&mut Self) -> Result<Expr, Diagnostic>,
+        op_of: fn(&Tok) -> Option<BinaryOp>,
+    ) -> Result<Expr, Diagnostic> {
+        let mut lhs = operand(self)?;
         let mut chain = 0;
-        loop {
+        while let Some(op) = op_of(&self.peek().tok) {
             chain += 1;
             if chain > MAX_CHAIN {
                 return Err(self.err(
@@ -460,19 +438,15 @@ impl Parser<'_> {
                     format!("more than {MAX_CHAIN} operators in a row; use `let` bindings"),
                 ));
             }
-            let op = match self.peek().tok {
-                Tok::Punct('*') => BinaryOp::Mul,
-                Tok::Punct('/') => BinaryOp::Div,
-                _ => return Ok(lhs),
-            };
             self.bump();
-            let rhs = self.unary()?;
+            let rhs = operand(self)?;
             let span = lhs.span.to(rhs.span);
             lhs = Expr {
                 kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)),
                 span,
             };
         }
+        Ok(lhs)
     }
 
     fn unary(&mut self) -> Result<Expr, Diagnostic> {
@@ -480,19 +454,13 @@ impl Parser<'_> {
             let t = self.bump();
             self.depth += 1;
             if self.depth > MAX_DEPTH {
-                return Err(self.err(
-                    "expression nested too deeply",
-                    format!("more than {MAX_DEPTH} levels"),
-                ));
+                return Err(self.err("expression nested too deeply", format!("more than {MAX_DEPTH} levels")));
             }
             let inner = self.unary()?;
             self.depth -= 1;
             let span = t.span.to(inner.span);
             if t.tok == Tok::Punct('+') {
-                return Ok(Expr {
-                    kind: inner.kind,
-                    span,
-                });
+                return Ok(Expr { kind: inner.kind, span });
             }
             return Ok(Expr {
                 kind: ExprKind::Neg(Box::new(inner)),
@@ -519,10 +487,7 @@ impl Parser<'_> {
                     return Err(Diagnostic::new(
                         self.source,
                         t.span,
-                        format!(
-                            "expected a swizzle such as `.xz` after `.`, found {}",
-                            describe(&other)
-                        ),
+                        format!("expected a swizzle such as `.xz` after `.`, found {}", describe(&other)),
                     )
                     .with_label("expected components"))
                 }
@@ -552,8 +517,7 @@ impl Parser<'_> {
                             break;
                         }
                     }
-                    let close =
-                        self.expect_punct(')', &format!("to close the arguments of `{name}`"))?;
+                    let close = self.expect_punct(')', &format!("to close the arguments of `{name}`"))?;
                     Ok(Expr {
                         kind: ExprKind::Call {
                             name,
@@ -618,13 +582,7 @@ mod tests {
         let toks = lex("1 .5 2.5e-3 1e2 3.0f", 0).unwrap();
         let v: Vec<f64> = toks
             .iter()
-            .filter_map(|t| {
-                if let Tok::Num(v) = t.tok {
-                    Some(v)
-                } else {
-                    None
-                }
-            })
+            .filter_map(|t| if let Tok::Num(v) = t.tok { Some(v) } else { None })
             .collect();
         assert_eq!(v, vec![1.0, 0.5, 2.5e-3, 100.0, 3.0]);
     }

@@ -96,9 +96,7 @@ fn sphere() {
 
 #[test]
 fn boxes() {
-    check("box(p, vec3(1.0, 0.5, 1.5))", |p| {
-        ref_box(p, [1.0, 0.5, 1.5])
-    });
+    check("box(p, vec3(1.0, 0.5, 1.5))", |p| ref_box(p, [1.0, 0.5, 1.5]));
     check("box(p, 1.0)", |p| ref_box(p, [1.0; 3]));
     check("round_box(p, vec3(1.0, 0.8, 1.2), 0.3)", |p| {
         ref_box(p, [0.7, 0.5, 0.9]) - 0.3
@@ -115,11 +113,7 @@ fn plane_and_ellipsoid() {
     check("ellipsoid(p, vec3(1.0, 0.5, 1.5))", |p| {
         let r = [1.0, 0.5, 1.5];
         let k0 = len([p[0] / r[0], p[1] / r[1], p[2] / r[2]]);
-        let k1 = len([
-            p[0] / (r[0] * r[0]),
-            p[1] / (r[1] * r[1]),
-            p[2] / (r[2] * r[2]),
-        ]);
+        let k1 = len([p[0] / (r[0] * r[0]), p[1] / (r[1] * r[1]), p[2] / (r[2] * r[2])]);
         k0 * (k0 - 1.0) / k1
     });
     let e = compile(&Library::new(), "ellipsoid(p, vec3(1.0, 0.5, 1.5))").unwrap();
@@ -138,9 +132,7 @@ fn cylinder_capsule_torus() {
     check("capsule(p, 1.2, 0.4)", |p| {
         len([p[0], p[1] - clamp(p[1], -0.6, 0.6), p[2]]) - 0.4
     });
-    check("torus(p, 1.0, 0.3)", |p| {
-        len2(len2(p[0], p[2]) - 1.0, p[1]) - 0.3
-    });
+    check("torus(p, 1.0, 0.3)", |p| len2(len2(p[0], p[2]) - 1.0, p[1]) - 0.3);
     let lib = Library::new();
     let c = compile(&lib, "cylinder(p, 1.0, 0.5)").unwrap();
     assert!((c.eval([0.0, 2.0, 0.0]) - 1.0).abs() < 1e-12);
@@ -195,9 +187,7 @@ fn smooth_operators_match_their_formulas() {
     let fa = |p: V| len(p) - 1.0;
     let fb = |p: V| ref_box([p[0] - 0.8, p[1], p[2]], [0.5; 3]);
     let (a, b) = ("sphere(p, 1.0)", "box(p - vec3(0.8, 0.0, 0.0), vec3(0.5))");
-    let corr = |x: f64, y: f64, k: f64, n: f64| {
-        (k - (x - y).abs()).max(0.0).powf(n) / (2.0 * n * k.powf(n - 1.0))
-    };
+    let corr = |x: f64, y: f64, k: f64, n: f64| (k - (x - y).abs()).max(0.0).powf(n) / (2.0 * n * k.powf(n - 1.0));
     for (k, n) in [(0.3, 2.0), (0.5, 3.0), (0.2, 1.5)] {
         check(&format!("smooth_union({a}, {b}, {k}, {n})"), |p| {
             fa(p).min(fb(p)) - corr(fa(p), fb(p), k, n)
@@ -235,11 +225,7 @@ fn smooth_identities() {
     for p in points(200) {
         for (k, n) in [(0.3, 2.0), (0.5, 3.0), (0.8, 4.0)] {
             // smooth_union(a, a, k) = a - k/(2n) for the polynomial family.
-            let s = compile(
-                &lib,
-                &format!("smooth_union(sphere(p, 1.0), sphere(p, 1.0), {k}, {n})"),
-            )
-            .unwrap();
+            let s = compile(&lib, &format!("smooth_union(sphere(p, 1.0), sphere(p, 1.0), {k}, {n})")).unwrap();
             let a = len(p) - 1.0;
             assert!((s.eval(p) - (a - k / (2.0 * n))).abs() < 1e-12);
         }
@@ -251,19 +237,11 @@ fn smooth_identities() {
         ] {
             let args = "sphere(p, 1.0), box(p - vec3(0.5), vec3(0.6)), 0.0";
             let s = compile(&lib, &format!("{soft}({args})")).unwrap();
-            let h = compile(
-                &lib,
-                &format!("{hard}(sphere(p, 1.0), box(p - vec3(0.5), vec3(0.6)))"),
-            )
-            .unwrap();
+            let h = compile(&lib, &format!("{hard}(sphere(p, 1.0), box(p - vec3(0.5), vec3(0.6)))")).unwrap();
             assert_eq!(s.eval(p), h.eval(p));
         }
         // A non-constant k that evaluates to 0 also gives the hard operator, without NaN.
-        let s = compile(
-            &lib,
-            "smooth_union(sphere(p, 1.0), box(p, vec3(0.5)), p.x * 0.0)",
-        )
-        .unwrap();
+        let s = compile(&lib, "smooth_union(sphere(p, 1.0), box(p, vec3(0.5)), p.x * 0.0)").unwrap();
         let h = compile(&lib, "union(sphere(p, 1.0), box(p, vec3(0.5)))").unwrap();
         assert_eq!(s.eval(p), h.eval(p));
     }
@@ -309,20 +287,14 @@ fn domain_operators() {
     let tw = s("box(twist_y(p, 1.0), vec3(1.0, 2.0, 0.1))");
     assert!(tw.eval([0.9, 0.0, 0.0]) < 0.0);
     let (c, sn) = ((1.0f64).cos(), (1.0f64).sin());
-    assert!(
-        tw.eval([0.9 * c, 1.0, -0.9 * sn]) < 0.0,
-        "the bar turns with height"
-    );
+    assert!(tw.eval([0.9 * c, 1.0, -0.9 * sn]) < 0.0, "the bar turns with height");
     // Bend is the identity at x = 0.
     let bd = s("box(bend(p, 0.5), vec3(1.0, 0.2, 0.2))");
     assert!((bd.eval([0.0, 0.5, 0.0]) - 0.3).abs() < 1e-12);
     // Displacement is a distance term.
     let d = s("sphere(p, 1.0) + displace(p, 0.1, 5.0)");
     let p = [0.3, 0.4, 0.5];
-    assert!(
-        (d.eval(p) - (len(p) - 1.0 + 0.1 * (1.5f64).sin() * (2.0f64).sin() * (2.5f64).sin())).abs()
-            < 1e-12
-    );
+    assert!((d.eval(p) - (len(p) - 1.0 + 0.1 * (1.5f64).sin() * (2.0f64).sin() * (2.5f64).sin())).abs() < 1e-12);
     // Uniform scale: sphere(p / s, r) * s is a sphere of radius r*s.
     let sc = s("sphere(p / 2.0, 1.0) * 2.0");
     assert!((sc.eval([3.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);

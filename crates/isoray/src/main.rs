@@ -116,9 +116,7 @@ fn main() -> ExitCode {
             )
         }
         Command::Eval { scene, set } => cmd_eval(&scene, &set),
-        Command::Check { scene, set } => load(&scene, &set)
-            .map(|_| println!("ok"))
-            .map_err(Failure::from),
+        Command::Check { scene, set } => load(&scene, &set).map(|_| println!("ok")).map_err(Failure::from),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -155,10 +153,7 @@ fn cmd_render(
         if let Some(p) = p {
             let ext = p.extension().map(|e| e.to_string_lossy().to_lowercase());
             if ext.as_deref() != Some(what) {
-                return Err(usage(format!(
-                    "output `{}` must end in .{what}",
-                    p.display()
-                )));
+                return Err(usage(format!("output `{}` must end in .{what}", p.display())));
             }
         }
     }
@@ -186,20 +181,9 @@ fn cmd_render(
     .map_err(|_| io_failure("the renderer failed unexpectedly".into()))?;
     let elapsed = start.elapsed().as_secs_f64();
     let w = |r: Result<(), output::OutputError>| r.map_err(|e| io_failure(e.to_string()));
-    w(output::write_png(
-        out,
-        image.width,
-        image.height,
-        &image.color,
-    ))?;
+    w(output::write_png(out, image.width, image.height, &image.color))?;
     if let (Some(p), Some(d)) = (depth, &image.depth) {
-        w(output::write_exr_channel(
-            p,
-            image.width,
-            image.height,
-            "Z",
-            d,
-        ))?;
+        w(output::write_exr_channel(p, image.width, image.height, "Z", d))?;
     }
     if let (Some(p), Some(n)) = (normals, &image.normals) {
         w(output::write_exr_rgb(p, image.width, image.height, n))?;
@@ -210,19 +194,11 @@ fn cmd_render(
     Ok(())
 }
 
-fn show_progress<T>(
-    handle: &std::thread::ScopedJoinHandle<'_, T>,
-    done: &AtomicUsize,
-    total: usize,
-    start: Instant,
-) {
+fn show_progress<T>(handle: &std::thread::ScopedJoinHandle<'_, T>, done: &AtomicUsize, total: usize, start: Instant) {
     let mut bar: Option<indicatif::ProgressBar> = None;
     while !handle.is_finished() {
         std::thread::sleep(Duration::from_millis(50));
-        if bar.is_none()
-            && start.elapsed() > Duration::from_secs(1)
-            && std::io::stderr().is_terminal()
-        {
+        if bar.is_none() && start.elapsed() > Duration::from_secs(1) && std::io::stderr().is_terminal() {
             let b = indicatif::ProgressBar::new(total as u64);
             b.set_style(
                 indicatif::ProgressStyle::with_template(

@@ -41,10 +41,7 @@ fn renders_every_example() {
         if path.extension().is_none_or(|e| e != "toml") {
             continue;
         }
-        let out = tmp(&format!(
-            "{}.png",
-            path.file_stem().unwrap().to_string_lossy()
-        ));
+        let out = tmp(&format!("{}.png", path.file_stem().unwrap().to_string_lossy()));
         let o = run(isoray()
             .arg("render")
             .arg(&path)
@@ -75,20 +72,11 @@ fn depth_and_normal_aovs_are_exr() {
         .arg(&normals)
         .arg("--quiet"));
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(
-        o.stderr.is_empty(),
-        "--quiet prints nothing: {}",
-        stderr(&o)
-    );
+    assert!(o.stderr.is_empty(), "--quiet prints nothing: {}", stderr(&o));
     let read = |p: &Path| exr::prelude::read_all_flat_layers_from_file(p).unwrap();
     let d = read(&depth);
     let layer = &d.layer_data[0];
-    let names: Vec<String> = layer
-        .channel_data
-        .list
-        .iter()
-        .map(|c| c.name.to_string())
-        .collect();
+    let names: Vec<String> = layer.channel_data.list.iter().map(|c| c.name.to_string()).collect();
     assert_eq!(names, vec!["Z"]);
     let z = |x: usize, y: usize| {
         layer.channel_data.list[0]
@@ -152,19 +140,10 @@ fn eval_prints_distances() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(b"1 2 3\n1 2\n")
-        .unwrap();
+    child.stdin.take().unwrap().write_all(b"1 2 3\n1 2\n").unwrap();
     let o = child.wait_with_output().unwrap();
     assert_eq!(o.status.code(), Some(2));
-    assert!(
-        stderr(&o).contains("stdin:2: expected three numbers"),
-        "{}",
-        stderr(&o)
-    );
+    assert!(stderr(&o).contains("stdin:2: expected three numbers"), "{}", stderr(&o));
 }
 
 #[test]
@@ -178,12 +157,7 @@ fn eval_uses_smooth_union_when_blending() {
         .stdout(Stdio::piped())
         .spawn()
         .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(b"0.75 0 0\n")
-        .unwrap();
+    child.stdin.take().unwrap().write_all(b"0.75 0 0\n").unwrap();
     let o = child.wait_with_output().unwrap();
     let v: f64 = String::from_utf8(o.stdout).unwrap().trim().parse().unwrap();
     // Both distances are -0.25: min - k/4 = -0.25 - 0.125.
@@ -197,10 +171,7 @@ fn check_reports_ok_or_located_errors() {
     assert!(o.status.success());
     assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "ok");
 
-    let bad = write_scene(
-        "bad.toml",
-        "[[object]]\nshape = \"sphere(p, vec2(1.0, 2.0))\"\n",
-    );
+    let bad = write_scene("bad.toml", "[[object]]\nshape = \"sphere(p, vec2(1.0, 2.0))\"\n");
     let o = run(isoray().arg("check").arg(&bad));
     assert_eq!(o.status.code(), Some(2));
     let e = stderr(&o);
@@ -232,10 +203,7 @@ fn exit_codes() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("render.aa"), "{}", stderr(&o));
     // I/O failures: 1.
-    let o = run(isoray()
-        .arg("render")
-        .arg(&good)
-        .args(["-o", "/nonexistent-dir/x.png"]));
+    let o = run(isoray().arg("render").arg(&good).args(["-o", "/nonexistent-dir/x.png"]));
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(
         stderr(&o).starts_with("error: cannot write `/nonexistent-dir/x.png`"),
@@ -252,20 +220,15 @@ fn thread_count_does_not_change_the_png() {
     let scene = examples().join("showcase.toml");
     let render = |threads: &str, name: &str| {
         let out = tmp(name);
-        let o = run(isoray()
-            .arg("render")
-            .arg(&scene)
-            .arg("-o")
-            .arg(&out)
-            .args([
-                "--width",
-                "80",
-                "--height",
-                "45",
-                "--threads",
-                threads,
-                "--quiet",
-            ]));
+        let o = run(isoray().arg("render").arg(&scene).arg("-o").arg(&out).args([
+            "--width",
+            "80",
+            "--height",
+            "45",
+            "--threads",
+            threads,
+            "--quiet",
+        ]));
         assert!(o.status.success(), "{}", stderr(&o));
         std::fs::read(out).unwrap()
     };

@@ -1,0 +1,103 @@
+//! The examples of `docs/SCENE.md` work: every ```toml block that is a complete
+//! scene (contains `[[object]]`) loads, and every ```glsl block (one shape)
+//! compiles. Every primitive, operator and domain operator has an example.
+
+use std::path::Path;
+
+use isoray_shape::library::{Category, FUNCTIONS};
+
+/// A fenced code block: its tag, the 1-based line of its opening fence, its text.
+struct Block {
+    tag: String,
+    line: usize,
+    text: String,
+}
+
+fn scene_md() -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/SCENE.md");
+    std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
+}
+
+fn blocks(md: &str) -> Vec<Block> {
+    let mut out = Vec::new();
+    let mut open: Option<Block> = None;
+    for (i, line) in md.lines().enumerate() {
+        let trimmed = line.trim_start();
+        if let Some(info) = trimmed.strip_prefix("```") {
+            match open.take() {
+                Some(b) => out.push(b),
+                None => {
+                    open = Some(Block {
+                        tag: info.split_whitespace().next().unwrap_or("").to_string(),
+                        line: i + 1,
+                        text: String::new(),
+                    })
+                }
+            }
+            continue;
+        }
+        if let Some(b) = &mut open {
+            b.text.push_str(line);
+            b.text.push('\n');
+        }
+    }
+    assert!(open.is_none(), "SCENE.md ends inside a code block");
+    out
+}
+
+/// True when `text` calls `name(` (not as the tail of a longer name).
+fn calls(text: &str, name: &str) -> bool {
+    let pat = format!("{name}(");
+    text.match_indices(&pat).any(|(i, _)| {
+        !text[..i]
+            .chars()
+            .next_back()
+            .is_some_and(|c| c.is_ascii_alphanumeric() || c == '_')
+    })
+}
+
+#[test]
+fn toml_scenes_load() {
+    let md = scene_md();
+    let mut scenes = 0;
+    for b in blocks(&md).iter().filter(|b| b.tag == "toml") {
+        if !b.text.contains("[[object]]") {
+            continue;
+        }
+        scenes += 1;
+        if let Err(e) = isoray_scene::load_str(&b.text, "SCENE.md", &[]) {
+            panic!(
+                "the ```toml block at SCENE.md line {} does not load:\n{e}",
+                b.line
+            );
+        }
+    }
+    assert!(scenes >= 5, "only {scenes} complete scenes found in SCENE.md");
+}
+
+#[test]
+fn glsl_shapes_compile() {
+    let md = scene_md();
+    let lib = isoray_shape::Library::new();
+    let shapes: Vec<Block> = blocks(&md)
+        .into_iter()
+        .filter(|b| b.tag == "glsl")
+        .collect();
+    for b in &shapes {
+        if let Err(e) = isoray_shape::compile(&lib, &b.text) {
+            panic!(
+                "the ```glsl block at SCENE.md line {} does not compile: {} (at bytes {}..{} of the block)\n{}",
+                b.line, e.message, e.span.start, e.span.end, b.text
+            );
+        }
+    }
+    // Every primitive, operator and domain operator is shown in a shape example.
+    for f in FUNCTIONS.iter().filter(|f| f.category != Category::Builtin) {
+        assert!(
+            shapes.iter().any(|b| calls(&b.text, f.name)),
+            "SCENE.md has no ```glsl example calling `{}`",
+            f.name
+        );
+    }
+}
