@@ -89,6 +89,17 @@ fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str
         }
         let p = match pos {
             Some(p) => p,
+            None if path[i + 1].parse::<usize>().is_ok() => {
+                return Err(src.error(
+                    origin,
+                    format!(
+                        "the scene has no `{seg}` array, so `{}` does not exist",
+                        path[..=i + 1].join(".")
+                    ),
+                    Some("no such element"),
+                    &[format!("add a [[{seg}]] table to the scene first")],
+                ));
+            }
             None => {
                 table.push(Entry {
                     key: seg.to_string(),
@@ -308,6 +319,22 @@ impl<'a> Reader<'a> {
     /// Errors on keys that were never read.
     fn finish(self, known: &[&str]) -> Result<()> {
         for (e, used) in self.entries.iter().zip(&self.used) {
+            if !used && known.contains(&e.key.as_str()) {
+                return Err(self.src.error(
+                    e.key_origin,
+                    format!("`{}.{}` does not apply here", self.ctx, e.key),
+                    Some("not used with these settings"),
+                    &[match e.key.as_str() {
+                        "direction" => {
+                            "`direction` is for directional lights; point lights have a `position`".to_string()
+                        }
+                        "position" => {
+                            "`position` is for point lights; directional lights have a `direction`".to_string()
+                        }
+                        _ => "remove it, or change the setting that makes it unused".to_string(),
+                    }],
+                ));
+            }
             if !used {
                 let mut notes = vec![format!("known keys: {}", known.join(", "))];
                 if let Some(s) = suggest(&e.key, known.iter().copied()) {

@@ -15,8 +15,7 @@ struct Block {
 
 fn scene_md() -> String {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/SCENE.md");
-    std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
 }
 
 fn blocks(md: &str) -> Vec<Block> {
@@ -67,10 +66,7 @@ fn toml_scenes_load() {
         }
         scenes += 1;
         if let Err(e) = isoray_scene::load_str(&b.text, "SCENE.md", &[]) {
-            panic!(
-                "the ```toml block at SCENE.md line {} does not load:\n{e}",
-                b.line
-            );
+            panic!("the ```toml block at SCENE.md line {} does not load:\n{e}", b.line);
         }
     }
     assert!(scenes >= 5, "only {scenes} complete scenes found in SCENE.md");
@@ -80,10 +76,7 @@ fn toml_scenes_load() {
 fn glsl_shapes_compile() {
     let md = scene_md();
     let lib = isoray_shape::Library::new();
-    let shapes: Vec<Block> = blocks(&md)
-        .into_iter()
-        .filter(|b| b.tag == "glsl")
-        .collect();
+    let shapes: Vec<Block> = blocks(&md).into_iter().filter(|b| b.tag == "glsl").collect();
     for b in &shapes {
         if let Err(e) = isoray_shape::compile(&lib, &b.text) {
             panic!(

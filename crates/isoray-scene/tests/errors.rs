@@ -86,6 +86,13 @@ fn semantic_errors() {
     assert!(e.message.contains("no objects"), "{e}");
     let e = err("[[light]]\nkind = \"point\"\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
     assert!(e.message.contains("needs a `position`"), "{e}");
+    let e = err("[[light]]\nkind = \"point\"\nposition = [0.0, 1.0, 0.0]\ndirection = [0.0, 1.0, 0.0]\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
+    assert!(
+        e.message.contains("`light.0.direction` does not apply here")
+            && e.rendered.contains("point lights have a `position`"),
+        "{e}"
+    );
+    assert_eq!(e.line, Some(4));
 }
 
 #[test]
@@ -113,6 +120,7 @@ fn overrides() {
     assert!((s.distance([3.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
     for (ov, want) in [
         ("light.5.intensity=2", "out of range"),
+        ("material.0.diffuse=[1, 1, 1]", "no `material` array"),
         ("render.width=abc", "render.width"),
         ("render", "KEY=VALUE"),
         ("object.0.shape=sphere(p)", "takes 2 argument"),

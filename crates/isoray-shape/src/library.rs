@@ -822,15 +822,18 @@ fn smin_exp(b: &mut Builder, x: Node, y: Node, k: Node) -> Node {
 
 /// ((a^k b^k)/(a^k + b^k))^(1/k) for a, b > 0; min(a, b) where either is not positive.
 fn smin_pow(b: &mut Builder, x: Node, y: Node, k: Node) -> Node {
+    // (a^k b^k / (a^k + b^k))^(1/k) = m (1 + (m/M)^k)^(-1/k) with m = min, M = max:
+    // the same value, without overflowing a^k b^k in f32.
     let m = b.min(x, y);
-    let xa = b.binary(BinOp::Pow, x, k);
-    let ya = b.binary(BinOp::Pow, y, k);
-    let num = b.mul(xa, ya);
-    let den = b.add(xa, ya);
-    let q = b.div(num, den);
+    let big = b.max(x, y);
+    let ratio = b.div(m, big);
+    let rk = b.binary(BinOp::Pow, ratio, k);
     let one = b.constant(1.0);
-    let ik = b.div(one, k);
-    let r = b.binary(BinOp::Pow, q, ik);
+    let s = b.add(one, rk);
+    let nk = b.neg(k);
+    let e = b.div(one, nk);
+    let f = b.binary(BinOp::Pow, s, e);
+    let r = b.mul(m, f);
     b.select(m, r, m)
 }
 

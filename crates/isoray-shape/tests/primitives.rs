@@ -209,6 +209,17 @@ fn smooth_operators_match_their_formulas() {
     check(&format!("smin_root({a}, {b}, 0.3)"), |p| {
         0.5 * (fa(p) + fb(p) - ((fa(p) - fb(p)).powi(2) + 0.09).sqrt())
     });
+    // smin_pow stays finite in f32 far from the shapes (no overflow of a^k b^k).
+    let far = compile(
+        &Library::new(),
+        "smin_pow(sphere(p, 1.0), sphere(p - vec3(2.0, 0.0, 0.0), 1.0), 16.0)",
+    )
+    .unwrap();
+    let mut e = isoray_shape::PointEvaluator::<f32>::new(far.tape());
+    let v = e.eval(0.0, 0.0, 30.0);
+    let (da, db) = (29.0f64, (904.0f64).sqrt() - 1.0);
+    let want = ((da.powi(16) * db.powi(16)) / (da.powi(16) + db.powi(16))).powf(1.0 / 16.0);
+    assert!(v.is_finite() && (v as f64 - want).abs() < 1e-3, "{v} vs {want}");
     check(&format!("smin_pow({a}, {b}, 8.0)"), |p| {
         let (x, y) = (fa(p), fb(p));
         if x.min(y) <= 0.0 {
