@@ -32,6 +32,20 @@ fn write_scene(name: &str, text: &str) -> PathBuf {
     p
 }
 
+/// Runs `isoray eval SCENE` with `input` on stdin.
+fn eval_stdin(scene: &Path, input: &[u8]) -> Output {
+    let mut child = isoray()
+        .arg("eval")
+        .arg(scene)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(input).unwrap();
+    child.wait_with_output().unwrap()
+}
+
 const SPHERE: &str = "[camera]\nposition = [0.0, 0.0, 4.0]\n[render]\nwidth = 40\nheight = 30\n[[light]]\n[[object]]\nshape = \"sphere(p, 1.0)\"\n";
 
 #[test]
@@ -105,21 +119,7 @@ fn depth_and_normal_aovs_are_exr() {
 #[test]
 fn eval_prints_distances() {
     let scene = write_scene("eval.toml", SPHERE);
-    let mut child = isoray()
-        .arg("eval")
-        .arg(&scene)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(b"2 0 0\n0 0 0\n\n# comment\n0.6 0.0 0.8\n1e-3 0 0\n")
-        .unwrap();
-    let o = child.wait_with_output().unwrap();
+    let o = eval_stdin(&scene, b"2 0 0\n0 0 0\n\n# comment\n0.6 0.0 0.8\n1e-3 0 0\n");
     assert!(o.status.success(), "{}", stderr(&o));
     let vals: Vec<f64> = String::from_utf8(o.stdout)
         .unwrap()
@@ -132,16 +132,7 @@ fn eval_prints_distances() {
     assert!(vals[2].abs() < 1e-15);
     assert_eq!(vals[3], 1e-3 - 1.0, "full precision");
 
-    let mut child = isoray()
-        .arg("eval")
-        .arg(&scene)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child.stdin.take().unwrap().write_all(b"1 2 3\n1 2\n").unwrap();
-    let o = child.wait_with_output().unwrap();
+    let o = eval_stdin(&scene, b"1 2 3\n1 2\n");
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("stdin:2: expected three numbers"), "{}", stderr(&o));
 }
@@ -150,15 +141,7 @@ fn eval_prints_distances() {
 fn eval_uses_smooth_union_when_blending() {
     let text = "[render]\nblend = 0.5\n[[object]]\nshape = \"sphere(p, 1.0)\"\n[[object]]\nshape = \"sphere(p - vec3(1.5, 0.0, 0.0), 1.0)\"\n";
     let scene = write_scene("blend.toml", text);
-    let mut child = isoray()
-        .arg("eval")
-        .arg(&scene)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child.stdin.take().unwrap().write_all(b"0.75 0 0\n").unwrap();
-    let o = child.wait_with_output().unwrap();
+    let o = eval_stdin(&scene, b"0.75 0 0\n");
     let v: f64 = String::from_utf8(o.stdout).unwrap().trim().parse().unwrap();
     // Both distances are -0.25: min - k/4 = -0.25 - 0.125.
     assert!((v - -0.375).abs() < 1e-12, "{v}");
