@@ -19,12 +19,14 @@
 
 pub mod coeff;
 pub mod groebner;
+pub mod implicit;
 pub mod monomial;
 pub mod parse;
 pub mod poly;
 
 pub use coeff::{Coeff, Domain, Field, Fp, Int, Rat};
 pub use groebner::{groebner, Budget, GroebnerError, GroebnerOptions, GroebnerResult, Stats, Strategy};
+pub use implicit::{implicitize_groebner, Implicit, ImplicitError};
 pub use monomial::{Monomial, MonomialOrder};
 pub use parse::{parse_poly, parse_rational, ParseError, RatFunc};
 pub use poly::{divide, Poly, Ring};

@@ -309,7 +309,10 @@ impl Parser<'_> {
         };
         let r = self.ring;
         if e == 0 {
-            return Ok(RatFunc { num: one(r), den: one(r) });
+            return Ok(RatFunc {
+                num: one(r),
+                den: one(r),
+            });
         }
         let (num, den) = (base.num.pow(r, e), base.den.pow(r, e));
         if neg {

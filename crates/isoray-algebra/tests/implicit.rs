@@ -1,0 +1,77 @@
+//! The known implicitization answers, and the errors.
+
+use isoray_algebra::implicit::implicitize_groebner;
+use isoray_algebra::parse::to_primitive_integer;
+use isoray_algebra::{parse_poly, GroebnerOptions, ImplicitError, MonomialOrder, Ring};
+
+const CASES: &[(&str, &str, &str, &str)] = &[
+    ("s+t", "s", "t", "x - y - z"),
+    ("t^2+s^2", "t", "s", "x - y^2 - z^2"),
+    ("t", "s", "t^2-s^2", "x^2 - y^2 - z"),
+    (
+        "2s/(s^2+t^2+1)",
+        "2t/(s^2+t^2+1)",
+        "(s^2+t^2-1)/(s^2+t^2+1)",
+        "x^2 + y^2 + z^2 - 1",
+    ),
+    ("s", "t", "s^2+t^2", "x^2 + y^2 - z"),
+    ("(t-s)/t", "s/t", "(s^3+t^2)/t^2", "x + y - 1"),
+    ("s/t", "s/t^2", "(s+t)/s", "xz - x - 1"),
+    ("s/(st)", "(t^2-s)/t^2", "t/s", "x + yz - z"),
+    ("(t-s^2)/(st)", "s^2/3", "s", "3y - z^2"),
+];
+
+#[test]
+fn known_implicit_equations() {
+    let ring = Ring::new(&["x", "y", "z"], MonomialOrder::DegRevLex);
+    for (x, y, z, want) in CASES {
+        let got = implicitize_groebner(&[x, y, z], &["s", "t"], &GroebnerOptions::default())
+            .unwrap_or_else(|e| panic!("{x}, {y}, {z}: {e}"));
+        let want = to_primitive_integer(&ring, &parse_poly(&ring, want).unwrap());
+        assert_eq!(got.poly, want, "x={x}, y={y}, z={z}: got {}", got.display());
+    }
+}
+
+#[test]
+fn plane_curves() {
+    // The unit circle, rationally parametrized.
+    let got = implicitize_groebner(&["(1-t^2)/(1+t^2)", "2t/(1+t^2)"], &["t"], &GroebnerOptions::default()).unwrap();
+    assert_eq!(got.display(), "x^2 + y^2 - 1");
+    // The cuspidal cubic.
+    let got = implicitize_groebner(&["t^2", "t^3"], &["t"], &GroebnerOptions::default()).unwrap();
+    assert_eq!(got.display(), "x^3 - y^2");
+}
+
+#[test]
+fn errors() {
+    let o = GroebnerOptions::default();
+    let e = implicitize_groebner(&["s/(t-t)", "s", "t"], &["s", "t"], &o).unwrap_err();
+    assert!(
+        matches!(&e, ImplicitError::Parse { error, .. } if error.message.contains("division by zero")),
+        "{e}"
+    );
+    let e = implicitize_groebner(&["s + x", "s", "t"], &["s", "t"], &o).unwrap_err();
+    assert!(
+        matches!(&e, ImplicitError::UsesCoordinate { var, .. } if var == "x"),
+        "{e}"
+    );
+    let e = implicitize_groebner(&["s", "s^2", "s^3"], &["s"], &o).unwrap_err();
+    assert!(
+        matches!(e, ImplicitError::WrongParameterCount { want: 2, found: 1, .. }),
+        "{e}"
+    );
+    // A surface parametrization whose image is a curve: the elimination ideal is not principal.
+    let e = implicitize_groebner(&["s+t", "(s+t)^2", "(s+t)^3"], &["s", "t"], &o).unwrap_err();
+    match &e {
+        ImplicitError::NotPrincipal { found } => assert!(
+            found.contains("x^2 - y") || found.contains("y - x^2") || found.contains(','),
+            "{found}"
+        ),
+        other => panic!("{other}"),
+    }
+    let e = implicitize_groebner(&["s + q", "s", "t"], &["s", "t"], &o).unwrap_err();
+    assert!(
+        matches!(&e, ImplicitError::Parse { error, .. } if error.column == 5),
+        "{e}"
+    );
+}
