@@ -1,5 +1,7 @@
 //! The `isoray` command line.
 
+mod algebra_cmd;
+
 use std::io::{BufRead, BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -61,6 +63,53 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
+    /// Compute a reduced Gröbner basis; prints one polynomial per line.
+    Groebner {
+        /// Variables, largest first: x,y,z.
+        #[arg(long, value_delimiter = ',', required = true)]
+        vars: Vec<String>,
+        /// Monomial order: lex, deglex, grevlex, weighted:W1,W2,... or block:N1,N2,...
+        #[arg(long, default_value = "grevlex")]
+        order: String,
+        /// 0 for the rationals, or a prime p for GF(p).
+        #[arg(long, default_value_t = 0)]
+        field: u64,
+        /// Print statistics to stderr.
+        #[arg(long)]
+        stats: bool,
+        /// Read polynomials from FILE, one per line (`-` for stdin).
+        #[arg(long, value_name = "FILE")]
+        input: Option<String>,
+        /// Stop with an error after this many seconds.
+        #[arg(long, value_name = "SECONDS")]
+        timeout: Option<f64>,
+        /// The generators (put `--` before them if one starts with `-`).
+        polys: Vec<String>,
+    },
+    /// Find the implicit equation of a rational parametrization.
+    Implicitize {
+        /// x(s, t)
+        #[arg(long, allow_hyphen_values = true)]
+        x: String,
+        /// y(s, t)
+        #[arg(long, allow_hyphen_values = true)]
+        y: String,
+        /// z(s, t); leave out for a plane curve (x(t), y(t)).
+        #[arg(long, allow_hyphen_values = true)]
+        z: Option<String>,
+        /// Parameters (default s,t for surfaces, t for curves).
+        #[arg(long, value_delimiter = ',')]
+        params: Option<Vec<String>>,
+        /// auto or groebner.
+        #[arg(long, default_value = "auto")]
+        method: String,
+        /// Print statistics to stderr.
+        #[arg(long)]
+        stats: bool,
+        /// Stop with an error after this many seconds.
+        #[arg(long, value_name = "SECONDS")]
+        timeout: Option<f64>,
+    },
     /// Parse and type-check a scene; print `ok` or the errors.
     Check {
         /// The scene file.
@@ -116,6 +165,24 @@ fn main() -> ExitCode {
             )
         }
         Command::Eval { scene, set } => cmd_eval(&scene, &set),
+        Command::Groebner {
+            vars,
+            order,
+            field,
+            stats,
+            input,
+            timeout,
+            polys,
+        } => algebra_cmd::cmd_groebner(&vars, &order, field, stats, input.as_deref(), timeout, &polys),
+        Command::Implicitize {
+            x,
+            y,
+            z,
+            params,
+            method,
+            stats,
+            timeout,
+        } => algebra_cmd::cmd_implicitize(&x, &y, z.as_deref(), params.as_deref(), &method, stats, timeout),
         Command::Check { scene, set } => load(&scene, &set).map(|_| println!("ok")).map_err(Failure::from),
     };
     match result {

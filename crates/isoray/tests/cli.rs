@@ -217,3 +217,57 @@ fn thread_count_does_not_change_the_png() {
     };
     assert_eq!(render("1", "t1.png"), render("2", "t2.png"));
 }
+
+#[test]
+fn groebner_command() {
+    let o = run(isoray().args([
+        "groebner",
+        "--vars",
+        "s,t,x,y,z",
+        "--order",
+        "lex",
+        "x - s - t",
+        "y - s",
+        "z - t",
+        "--stats",
+    ]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(String::from_utf8_lossy(&o.stdout), "x - y - z\nt - z\ns - y\n");
+    assert!(stderr(&o).contains("reductions to zero"), "{}", stderr(&o));
+    // GF(7): 1/2 = 4 mod 7.
+    let o = run(isoray().args(["groebner", "--vars", "x,y", "--field", "7", "2*x - 1", "y^2 - x"]));
+    assert_eq!(String::from_utf8_lossy(&o.stdout), "x + 3\ny^2 + 3\n", "{}", stderr(&o));
+    // Input from a file with a located error.
+    let f = write_scene("polys.txt", "x^2 - y\n# comment\nx*y - 1 +\n");
+    let o = run(isoray().args(["groebner", "--vars", "x,y", "--input"]).arg(&f));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("polys.txt:3:"), "{}", stderr(&o));
+    for bad in [
+        &["--vars", "x,y", "--order", "nope", "x"][..],
+        &["--vars", "x", "--field", "8", "x"],
+        &["--vars", "x", "y"],
+    ] {
+        let o = run(isoray().arg("groebner").args(bad));
+        assert_eq!(o.status.code(), Some(2), "{bad:?}: {}", stderr(&o));
+        assert!(stderr(&o).starts_with("error:"), "{}", stderr(&o));
+    }
+}
+
+#[test]
+fn implicitize_command() {
+    let o = run(isoray().args(["implicitize", "--x", "(t-s^2)/(st)", "--y", "s^2/3", "--z", "s"]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "z^2 - 3*y");
+    let o = run(isoray().args(["implicitize", "--x", "t^2", "--y", "t^3"]));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).trim(), "x^3 - y^2");
+    let o = run(isoray().args(["implicitize", "--x", "s/(t-t)", "--y", "s", "--z", "t"]));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--x:") && stderr(&o).contains("division by zero"),
+        "{}",
+        stderr(&o)
+    );
+    let o = run(isoray().args(["implicitize", "--x", "s+x", "--y", "s", "--z", "t"]));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("uses the variable `x`"), "{}", stderr(&o));
+}

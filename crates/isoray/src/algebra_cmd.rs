@@ -1,0 +1,213 @@
+//! `isoray groebner` and `isoray implicitize`.
+
+use std::io::Read;
+use std::time::Duration;
+
+use isoray_algebra::coeff::is_prime;
+use isoray_algebra::groebner::groebner_in;
+use isoray_algebra::implicit::implicitize_groebner;
+use isoray_algebra::{
+    groebner, parse_poly, Budget, Fp, GroebnerOptions, ImplicitError, MonomialOrder, ParseError, Poly, Rat, Ring,
+};
+
+use crate::Failure;
+
+fn bad(message: String) -> Failure {
+    Failure { code: 2, message }
+}
+
+fn options(timeout: Option<f64>) -> Result<GroebnerOptions, Failure> {
+    let time = match timeout {
+        None => None,
+        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
+        Some(t) => {
+            return Err(bad(format!(
+                "--timeout must be a positive number of seconds, found {t}"
+            )))
+        }
+    };
+    Ok(GroebnerOptions {
+        budget: Budget {
+            time,
+            ..Default::default()
+        },
+        ..Default::default()
+    })
+}
+
+/// Renders a parse error located in `text`, which came from `origin`
+/// (`argument 2`, or `FILE:LINE`).
+fn located(origin: &str, text: &str, e: &ParseError) -> String {
+    let caret_pad = " ".repeat(e.column - 1);
+    let width = text[e.offset.min(text.len())..].chars().take(e.len).count().max(1);
+    format!(
+        "error: {}\n  --> {origin}:{}\n   |\n   | {text}\n   | {caret_pad}{}",
+        e.message,
+        e.column,
+        "^".repeat(width)
+    )
+}
+
+/// `isoray groebner`.
+pub fn cmd_groebner(
+    vars: &[String],
+    order: &str,
+    field: u64,
+    stats: bool,
+    input: Option<&str>,
+    timeout: Option<f64>,
+    polys: &[String],
+) -> Result<(), Failure> {
+    if vars.is_empty()
+        || vars.iter().any(|v| {
+            v.is_empty()
+                || !v.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                || !v.starts_with(|c: char| c.is_ascii_alphabetic())
+        })
+    {
+        return Err(bad(format!(
+            "--vars must be a comma-separated list of variable names such as x,y,z, found `{}`",
+            vars.join(",")
+        )));
+    }
+    let Some(order) = MonomialOrder::parse(order) else {
+        return Err(bad(format!(
+            "--order: expected lex, deglex, grevlex, weighted:W1,W2,... or block:N1,N2,..., found `{order}`"
+        )));
+    };
+    if let MonomialOrder::Weighted(w) = &order {
+        if w.len() != vars.len() || w.contains(&0) {
+            return Err(bad(format!(
+                "--order weighted needs {} positive weights, one per variable",
+                vars.len()
+            )));
+        }
+    }
+    if let MonomialOrder::Block(b) = &order {
+        if b.iter().sum::<usize>() != vars.len() || b.contains(&0) {
+            return Err(bad(format!(
+                "--order block sizes must be positive and add up to {} (the number of variables)",
+                vars.len()
+            )));
+        }
+    }
+    if field != 0 && (!is_prime(field) || field >= 1 << 63) {
+        return Err(bad(format!(
+            "--field must be 0 (the rationals) or a prime below 2^63, found {field}"
+        )));
+    }
+    let ring = Ring::new(vars, order);
+    // (text, origin) of every input polynomial.
+    let mut texts: Vec<(String, String)> = polys
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p.clone(), format!("argument {}", i + 1)))
+        .collect();
+    if let Some(path) = input {
+        let (name, content) = if path == "-" {
+            let mut s = String::new();
+            std::io::stdin().read_to_string(&mut s).map_err(|e| Failure {
+                code: 1,
+                message: format!("cannot read stdin: {e}"),
+            })?;
+            ("stdin".to_string(), s)
+        } else {
+            let s = std::fs::read_to_string(path).map_err(|e| Failure {
+                code: 1,
+                message: format!("cannot read `{path}`: {e}"),
+            })?;
+            (path.to_string(), s)
+        };
+        for (n, line) in content.lines().enumerate() {
+            let t = line.trim();
+            if t.is_empty() || t.starts_with('#') {
+                continue;
+            }
+            texts.push((line.to_string(), format!("{name}:{}", n + 1)));
+        }
+    }
+    if texts.is_empty() {
+        return Err(bad(
+            "no polynomials given: pass them as arguments or with --input FILE".into()
+        ));
+    }
+    let mut parsed: Vec<Poly<Rat>> = Vec::new();
+    for (t, origin) in &texts {
+        parsed.push(parse_poly(&ring, t).map_err(|e| bad(located(origin, t, &e)))?);
+    }
+    let opts = options(timeout)?;
+    let fail = |e: isoray_algebra::GroebnerError| Failure {
+        code: 1,
+        message: e.to_string(),
+    };
+    let (lines, st) = if field == 0 {
+        let r = groebner(&ring, &parsed, &opts).map_err(fail)?;
+        (r.basis.iter().map(|p| p.display(&ring)).collect::<Vec<_>>(), r.stats)
+    } else {
+        let mut mods = Vec::new();
+        for (p, (t, origin)) in parsed.iter().zip(&texts) {
+            let mut terms = Vec::new();
+            for (m, c) in p.terms() {
+                let Some(v) = Fp::from_rat(c, field) else {
+                    return Err(bad(format!(
+                        "{origin}: the coefficient {c} of `{t}` has a denominator divisible by {field}"
+                    )));
+                };
+                terms.push((m.clone(), v));
+            }
+            mods.push(Poly::from_terms(&ring, terms));
+        }
+        let (basis, st) = groebner_in(&ring, &mods, &opts).map_err(fail)?;
+        (basis.iter().map(|p| p.display(&ring)).collect(), st)
+    };
+    for l in lines {
+        println!("{l}");
+    }
+    if stats {
+        eprintln!("{st}");
+    }
+    Ok(())
+}
+
+/// `isoray implicitize`.
+pub fn cmd_implicitize(
+    x: &str,
+    y: &str,
+    z: Option<&str>,
+    params: Option<&[String]>,
+    method: &str,
+    stats: bool,
+    timeout: Option<f64>,
+) -> Result<(), Failure> {
+    if !matches!(method, "auto" | "groebner") {
+        return Err(bad(format!(
+            "--method: expected auto or groebner (interpolation is not available yet), found `{method}`"
+        )));
+    }
+    let coords: Vec<&str> = match z {
+        Some(z) => vec![x, y, z],
+        None => vec![x, y],
+    };
+    let default_params: Vec<String> = if coords.len() == 3 {
+        vec!["s".into(), "t".into()]
+    } else {
+        vec!["t".into()]
+    };
+    let params: Vec<&str> = params.unwrap_or(&default_params).iter().map(|s| s.as_str()).collect();
+    let opts = options(timeout)?;
+    match implicitize_groebner(&coords, &params, &opts) {
+        Ok(imp) => {
+            println!("{}", imp.display());
+            if stats {
+                eprintln!("{}", imp.stats);
+            }
+            Ok(())
+        }
+        Err(ImplicitError::Parse { coord, text, error }) => Err(bad(located(&format!("--{coord}"), &text, &error))),
+        Err(ImplicitError::Groebner(e)) => Err(Failure {
+            code: 1,
+            message: e.to_string(),
+        }),
+        Err(e) => Err(bad(e.to_string())),
+    }
+}
