@@ -19,6 +19,7 @@
 
 pub mod coeff;
 pub mod groebner;
+pub mod ideal;
 pub mod implicit;
 pub mod monomial;
 pub mod parse;
