@@ -24,6 +24,7 @@ pub mod implicit;
 pub mod monomial;
 pub mod parse;
 pub mod poly;
+pub mod resultant;
 
 pub use coeff::{Coeff, Domain, Field, Fp, Int, Rat};
 pub use groebner::{groebner, Budget, GroebnerError, GroebnerOptions, GroebnerResult, Stats, Strategy};

@@ -75,3 +75,26 @@ fn errors() {
         "{e}"
     );
 }
+
+#[test]
+fn resultant_cross_checks_groebner_for_plane_curves() {
+    use isoray_algebra::resultant::implicitize_curve_resultant;
+    let ring = Ring::new(&["x", "y"], MonomialOrder::DegRevLex);
+    for (x, y) in [
+        ("(1-t^2)/(1+t^2)", "2t/(1+t^2)"),
+        ("t^2", "t^3"),
+        ("t^2 - 1", "t^3 - t"),
+        ("t/(1+t^3)", "t^2/(1+t^3)"),
+    ] {
+        let g = implicitize_groebner(&[x, y], &["t"], &GroebnerOptions::default()).unwrap();
+        let r = implicitize_curve_resultant(x, y, "t").unwrap();
+        // For these proper parametrizations the resultant is the implicit equation itself, up to sign.
+        let neg = isoray_algebra::Poly::from_sorted(r.terms().iter().map(|(m, c)| (m.clone(), -c)).collect());
+        assert!(
+            r == g.poly || neg == g.poly,
+            "x={x}, y={y}: resultant {} vs Gröbner {}",
+            r.display(&ring),
+            g.display()
+        );
+    }
+}
