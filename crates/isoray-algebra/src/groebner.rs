@@ -297,6 +297,12 @@ impl<'a, D: Domain> State<'a, D> {
 
     /// Fully reduces f modulo the current basis (all elements except `skip`).
     fn reduce_full(&mut self, f: &Poly<D>, skip: Option<usize>) -> Result<Poly<D>, GroebnerError> {
+        self.reduce(f, skip, false)
+    }
+
+    /// Reduces f modulo the current basis (all elements except `skip`): only
+    /// until the leading term is irreducible when `top_only`, else fully.
+    fn reduce(&mut self, f: &Poly<D>, skip: Option<usize>, top_only: bool) -> Result<Poly<D>, GroebnerError> {
         let ring = self.ring;
         let mut p = f.clone();
         let mut rem: Vec<(Monomial, D)> = Vec::new();
@@ -350,6 +356,10 @@ impl<'a, D: Domain> State<'a, D> {
                         }
                         self.check()?;
                     }
+                }
+                None if top_only => {
+                    rem.extend(p.into_terms());
+                    break;
                 }
                 None => {
                     rem.push((lm, lc));

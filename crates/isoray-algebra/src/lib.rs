@@ -25,6 +25,7 @@ pub mod monomial;
 pub mod parse;
 pub mod poly;
 pub mod resultant;
+pub mod systems;
 
 pub use coeff::{Coeff, Domain, Field, Fp, Int, Rat};
 pub use groebner::{groebner, Budget, GroebnerError, GroebnerOptions, GroebnerResult, Stats, Strategy};

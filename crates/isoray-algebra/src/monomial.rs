@@ -5,10 +5,20 @@ use std::cmp::Ordering;
 use smallvec::SmallVec;
 
 /// A monomial x₀^e₀ x₁^e₁ … as its exponent vector, with its total degree cached.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+#[derive(Debug, PartialEq, Eq, Hash)]
 pub struct Monomial {
     exps: SmallVec<[u16; 8]>,
     deg: u32,
+}
+
+impl Clone for Monomial {
+    fn clone(&self) -> Self {
+        // `from_slice` copies with memcpy; SmallVec's own `clone` extends element by element.
+        Monomial {
+            exps: SmallVec::from_slice(&self.exps),
+            deg: self.deg,
+        }
+    }
 }
 
 impl Monomial {
@@ -84,23 +94,35 @@ impl Monomial {
         if !self.divides(o) {
             return None;
         }
+        let mut exps: SmallVec<[u16; 8]> = SmallVec::from_slice(&o.exps);
+        for (b, a) in exps.iter_mut().zip(&self.exps) {
+            *b -= a;
+        }
         Some(Monomial {
-            exps: self.exps.iter().zip(&o.exps).map(|(a, b)| b - a).collect(),
+            exps,
             deg: o.deg - self.deg,
         })
     }
 
     /// Least common multiple.
     pub fn lcm(&self, o: &Monomial) -> Monomial {
-        let exps: SmallVec<[u16; 8]> = self.exps.iter().zip(&o.exps).map(|(a, b)| *a.max(b)).collect();
-        let deg = exps.iter().map(|&e| e as u32).sum();
+        let mut exps: SmallVec<[u16; 8]> = SmallVec::from_slice(&self.exps);
+        let mut deg = 0;
+        for (a, b) in exps.iter_mut().zip(&o.exps) {
+            *a = (*a).max(*b);
+            deg += *a as u32;
+        }
         Monomial { exps, deg }
     }
 
     /// Greatest common divisor.
     pub fn gcd(&self, o: &Monomial) -> Monomial {
-        let exps: SmallVec<[u16; 8]> = self.exps.iter().zip(&o.exps).map(|(a, b)| *a.min(b)).collect();
-        let deg = exps.iter().map(|&e| e as u32).sum();
+        let mut exps: SmallVec<[u16; 8]> = SmallVec::from_slice(&self.exps);
+        let mut deg = 0;
+        for (a, b) in exps.iter_mut().zip(&o.exps) {
+            *a = (*a).min(*b);
+            deg += *a as u32;
+        }
         Monomial { exps, deg }
     }
 
