@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
-# Install the benchmark peer (POV-Ray 3.7, Debian package `povray`) with apt.
+# Install the benchmark peers with apt:
+#   - POV-Ray 3.7 (Debian package `povray`), for the renderer benchmark;
+#   - Singular (Debian package `singular`), for bench/singular/ (algebra
+#     reference data and timings).
 # Idempotent: does nothing when it is already installed.
 # Needs root (or sudo) on Debian/Ubuntu.
 set -euo pipefail
 
-PKGS=(povray)
+PKGS=(povray singular)
 
 missing=()
 for p in "${PKGS[@]}"; do
@@ -29,3 +32,4 @@ export DEBIAN_FRONTEND=noninteractive
 "${SUDO[@]}" apt-get install -y "${missing[@]}"
 
 povray --version 2>&1 | grep -m1 'POV-Ray' || true
+Singular --version 2>&1 | grep -m1 'Singular' || true

@@ -18,6 +18,7 @@
 //! ```
 
 pub mod coeff;
+pub mod fglm;
 pub mod groebner;
 pub mod ideal;
 pub mod implicit;
