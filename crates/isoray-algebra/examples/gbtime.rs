@@ -13,6 +13,20 @@ fn main() {
     } else {
         systems::katsura(n)
     };
+    if let Some(p) = args.get(3).and_then(|s| s.parse::<u64>().ok()) {
+        let mods: Vec<_> = polys
+            .iter()
+            .map(|f| f.map_coeffs(&ring, |c| isoray_algebra::Fp::from_rat(c, p).unwrap()))
+            .collect();
+        let t = std::time::Instant::now();
+        let (b, st) = isoray_algebra::groebner::groebner_in(&ring, &mods, &GroebnerOptions::default()).unwrap();
+        println!(
+            "{kind}-{n} mod {p}: {} elements in {:.3} s\n{st}",
+            b.len(),
+            t.elapsed().as_secs_f64()
+        );
+        return;
+    }
     let t = std::time::Instant::now();
     let r = groebner(&ring, &polys, &GroebnerOptions::default()).expect("no budget");
     println!(

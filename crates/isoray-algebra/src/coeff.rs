@@ -392,3 +392,100 @@ mod tests {
         assert_eq!(cs, vec![Int::from(2), Int::from(-3), Int::from(-5)]);
     }
 }
+
+/// The fast integer type of the fraction-free Gröbner engine (dashu's
+/// `IBig`, chosen by measurement: see `bench/bignum/RESULTS.md`; values up to
+/// 128 bits live inline without allocation).
+pub type ZInt = dashu_int::IBig;
+
+impl Coeff for ZInt {
+    fn zero_like(&self) -> Self {
+        ZInt::ZERO
+    }
+    fn one_like(&self) -> Self {
+        ZInt::ONE
+    }
+    fn int_like(&self, v: i64) -> Self {
+        ZInt::from(v)
+    }
+    fn is_zero(&self) -> bool {
+        ZInt::is_zero(self)
+    }
+    fn is_one(&self) -> bool {
+        ZInt::is_one(self)
+    }
+    fn add(&self, o: &Self) -> Self {
+        self + o
+    }
+    fn sub(&self, o: &Self) -> Self {
+        self - o
+    }
+    fn mul(&self, o: &Self) -> Self {
+        self * o
+    }
+    fn neg(&self) -> Self {
+        -self
+    }
+    fn is_negative(&self) -> bool {
+        self < &ZInt::ZERO
+    }
+}
+
+impl Domain for ZInt {
+    const FRACTION_FREE: bool = true;
+    fn cancel(c: &Self, d: &Self) -> (Self, Self) {
+        use dashu_base::Gcd;
+        let g = ZInt::from(c.gcd(d));
+        let (mut a, mut b) = (d / &g, c / &g);
+        if a < ZInt::ZERO {
+            a = -a;
+            b = -b;
+        }
+        (a, b)
+    }
+    fn normalize(coeffs: &mut [Self]) {
+        use dashu_base::Gcd;
+        let Some(first) = coeffs.first() else { return };
+        let neg = first < &ZInt::ZERO;
+        let mut g = dashu_int::UBig::ZERO;
+        for c in coeffs.iter() {
+            g = (&g).gcd(c);
+            if g.is_one() {
+                break;
+            }
+        }
+        if g.is_one() && !neg {
+            return;
+        }
+        let mut g = ZInt::from(g);
+        if neg {
+            g = -g;
+        }
+        for c in coeffs.iter_mut() {
+            *c = &*c / &g;
+        }
+    }
+}
+
+/// Converts between the two integer types (at the boundaries of the engine).
+pub fn to_zint(x: &Int) -> ZInt {
+    let (sign, bytes) = x.to_bytes_le();
+    let mag = ZInt::from(dashu_int::UBig::from_le_bytes(&bytes));
+    if sign == num_bigint::Sign::Minus {
+        -mag
+    } else {
+        mag
+    }
+}
+
+/// Converts a [`ZInt`] back to [`Int`].
+pub fn from_zint(x: &ZInt) -> Int {
+    let neg = x < &ZInt::ZERO;
+    let mag = dashu_int::UBig::try_from(if neg { -x } else { x.clone() }).unwrap_or(dashu_int::UBig::ZERO);
+    let n = Int::from_bytes_le(num_bigint::Sign::Plus, &mag.to_le_bytes());
+    if neg {
+        -n
+    } else {
+        n
+    }
+}
