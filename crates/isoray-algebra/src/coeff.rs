@@ -365,34 +365,6 @@ pub fn is_prime(p: u64) -> bool {
     true
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn prime_field() {
-        let p = 1_000_000_007;
-        let a = Fp::new(-3, p);
-        assert_eq!(a.value(), p - 3);
-        assert!(a.mul(&a.inv()).is_one());
-        let r = Rat::new(Int::from(1), Int::from(3));
-        let t = Fp::from_rat(&r, p).unwrap();
-        assert!(t.mul(&Fp::new(3, p)).is_one());
-        assert!(Fp::from_rat(&Rat::new(Int::from(1), Int::from(7)), 7).is_none());
-        assert!(is_prime(p) && is_prime(2) && is_prime(9_223_372_036_854_775_783) && !is_prime(1) && !is_prime(561));
-    }
-
-    #[test]
-    fn fraction_free_cancel() {
-        let (a, b) = Int::cancel(&Int::from(6), &Int::from(-4));
-        // a*6 = b*(-4) with a > 0 and no common factor.
-        assert_eq!((a.clone(), b.clone()), (Int::from(2), Int::from(-3)));
-        let mut cs = vec![Int::from(-4), Int::from(6), Int::from(10)];
-        Int::normalize(&mut cs);
-        assert_eq!(cs, vec![Int::from(2), Int::from(-3), Int::from(-5)]);
-    }
-}
-
 /// The fast integer type of the fraction-free Gröbner engine (dashu's
 /// `IBig`, chosen by measurement: see `bench/bignum/RESULTS.md`; values up to
 /// 128 bits live inline without allocation).
@@ -487,5 +459,33 @@ pub fn from_zint(x: &ZInt) -> Int {
         -n
     } else {
         n
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prime_field() {
+        let p = 1_000_000_007;
+        let a = Fp::new(-3, p);
+        assert_eq!(a.value(), p - 3);
+        assert!(a.mul(&a.inv()).is_one());
+        let r = Rat::new(Int::from(1), Int::from(3));
+        let t = Fp::from_rat(&r, p).unwrap();
+        assert!(t.mul(&Fp::new(3, p)).is_one());
+        assert!(Fp::from_rat(&Rat::new(Int::from(1), Int::from(7)), 7).is_none());
+        assert!(is_prime(p) && is_prime(2) && is_prime(9_223_372_036_854_775_783) && !is_prime(1) && !is_prime(561));
+    }
+
+    #[test]
+    fn fraction_free_cancel() {
+        let (a, b) = Int::cancel(&Int::from(6), &Int::from(-4));
+        // a*6 = b*(-4) with a > 0 and no common factor.
+        assert_eq!((a.clone(), b.clone()), (Int::from(2), Int::from(-3)));
+        let mut cs = vec![Int::from(-4), Int::from(6), Int::from(10)];
+        Int::normalize(&mut cs);
+        assert_eq!(cs, vec![Int::from(2), Int::from(-3), Int::from(-5)]);
     }
 }
