@@ -27,6 +27,16 @@ fn main() {
         );
         return;
     }
+    if args.get(3).map(String::as_str) == Some("modular") {
+        let t = std::time::Instant::now();
+        let (b, st) = isoray_algebra::modular::groebner_modular(&ring, &polys, &GroebnerOptions::default()).unwrap();
+        println!(
+            "{kind}-{n} modular: {} elements in {:.3} s\n{st}",
+            b.len(),
+            t.elapsed().as_secs_f64()
+        );
+        return;
+    }
     let t = std::time::Instant::now();
     let r = groebner(&ring, &polys, &GroebnerOptions::default()).expect("no budget");
     println!(

@@ -22,6 +22,7 @@ pub mod fglm;
 pub mod groebner;
 pub mod ideal;
 pub mod implicit;
+pub mod modular;
 pub mod monomial;
 pub mod parse;
 pub mod poly;
@@ -29,7 +30,7 @@ pub mod resultant;
 pub mod systems;
 
 pub use coeff::{Coeff, Domain, Field, Fp, Int, Rat};
-pub use groebner::{groebner, Budget, GroebnerError, GroebnerOptions, GroebnerResult, Stats, Strategy};
+pub use groebner::{groebner, Budget, GroebnerError, GroebnerOptions, GroebnerResult, Method, Stats, Strategy};
 pub use implicit::{implicitize_groebner, Implicit, ImplicitError};
 pub use monomial::{Monomial, MonomialOrder};
 pub use parse::{parse_poly, parse_rational, ParseError, RatFunc};

@@ -1,0 +1,246 @@
+//! Multi-modular Gröbner bases over Q (Arnold 2003; Idrees, Pfister and
+//! Steidel 2011): compute reduced bases modulo several word-size primes, keep
+//! the primes whose leading monomials agree with the majority, lift the
+//! coefficients by the Chinese remainder theorem and rational reconstruction,
+//! and accept the lift only after verifying over Q that it is a Gröbner basis
+//! (every S-pair the Gebauer–Möller criteria keep reduces to zero) whose ideal
+//! contains the input. With I ⊆ ⟨G⟩ and equal leading ideals (LM(G) is the
+//! leading ideal of I mod p for the majority of primes), ⟨G⟩ = I.
+
+use std::collections::HashMap;
+
+use num_integer::Integer;
+use num_traits::{One, Signed, Zero};
+
+use crate::coeff::{is_prime, to_zint, Domain, Fp, Int, Rat, ZInt};
+use crate::groebner::{check_groebner_basis, groebner_in, GroebnerError, GroebnerOptions, Stats};
+use crate::monomial::Monomial;
+use crate::parse::to_primitive_integer;
+use crate::poly::{Poly, Ring};
+
+/// The primes used, largest first: primes just below 2^62.
+fn primes() -> impl Iterator<Item = u64> {
+    let mut p = (1u64 << 62) - 1;
+    std::iter::from_fn(move || loop {
+        p -= 2;
+        if is_prime(p) {
+            return Some(p);
+        }
+    })
+}
+
+/// r/s ≡ a (mod m) with |r|, s ≤ √(m/2), if it exists (Wang's algorithm).
+pub fn rational_reconstruction(a: &Int, m: &Int) -> Option<Rat> {
+    let bound = (m / Int::from(2)).sqrt();
+    let (mut r0, mut r1) = (m.clone(), a.mod_floor(m));
+    let (mut s0, mut s1) = (Int::zero(), Int::one());
+    while r1 > bound {
+        let q = &r0 / &r1;
+        let r2 = &r0 - &q * &r1;
+        let s2 = &s0 - &q * &s1;
+        r0 = std::mem::replace(&mut r1, r2);
+        s0 = std::mem::replace(&mut s1, s2);
+    }
+    if s1.is_zero() || s1.abs() > bound || !r1.gcd(&s1).is_one() {
+        return None;
+    }
+    Some(Rat::new(r1, s1))
+}
+
+/// A basis lifted so far: for each element, monomial → residue modulo `modulus`.
+struct Lift {
+    lms: Vec<Monomial>,
+    elems: Vec<HashMap<Monomial, Int>>,
+    modulus: Int,
+    primes: usize,
+}
+
+impl Lift {
+    fn from_mod_p(basis: &[Poly<Fp>], p: u64) -> Lift {
+        Lift {
+            lms: basis.iter().map(|g| g.lm().expect("nonzero").clone()).collect(),
+            elems: basis
+                .iter()
+                .map(|g| {
+                    g.terms()
+                        .iter()
+                        .map(|(m, c)| (m.clone(), Int::from(c.value())))
+                        .collect()
+                })
+                .collect(),
+            modulus: Int::from(p),
+            primes: 1,
+        }
+    }
+
+    /// Chinese remaindering with one more prime's basis (same leading monomials).
+    fn combine(&mut self, basis: &[Poly<Fp>], p: u64) {
+        let pm = Int::from(p);
+        // x ≡ a (mod M), x ≡ b (mod p): x = a + M·((b − a)·M⁻¹ mod p).
+        let m_inv = mod_inverse(&self.modulus.mod_floor(&pm), &pm);
+        for (acc, g) in self.elems.iter_mut().zip(basis) {
+            let mut new: HashMap<Monomial, Int> = HashMap::with_capacity(acc.len().max(g.len()));
+            let residues: HashMap<&Monomial, u64> = g.terms().iter().map(|(m, c)| (m, c.value())).collect();
+            let mut keys: Vec<Monomial> = acc.keys().cloned().collect();
+            keys.extend(g.terms().iter().map(|t| t.0.clone()).filter(|m| !acc.contains_key(m)));
+            for m in keys {
+                let a = acc.get(&m).cloned().unwrap_or_else(Int::zero);
+                let b = Int::from(residues.get(&m).copied().unwrap_or(0));
+                let t = ((b - &a) * &m_inv).mod_floor(&pm);
+                new.insert(m, a + &self.modulus * t);
+            }
+            *acc = new;
+        }
+        self.modulus *= pm;
+        self.primes += 1;
+    }
+
+    /// Rational reconstruction of every coefficient.
+    fn reconstruct(&self, ring: &Ring) -> Option<Vec<Poly<Rat>>> {
+        let mut out = Vec::with_capacity(self.elems.len());
+        for e in &self.elems {
+            let mut terms = Vec::with_capacity(e.len());
+            for (m, a) in e {
+                if a.is_zero() {
+                    continue;
+                }
+                terms.push((m.clone(), rational_reconstruction(a, &self.modulus)?));
+            }
+            out.push(Poly::from_terms(ring, terms));
+        }
+        Some(out)
+    }
+}
+
+fn mod_inverse(a: &Int, p: &Int) -> Int {
+    let e = a.extended_gcd(p);
+    e.x.mod_floor(p)
+}
+
+/// The reduced Gröbner basis over Q by the multi-modular method; same
+/// result as [`crate::groebner::groebner`], verified over Q.
+pub fn groebner_modular(
+    ring: &Ring,
+    polys: &[Poly<Rat>],
+    opts: &GroebnerOptions,
+) -> Result<(Vec<Poly<Rat>>, Stats), GroebnerError> {
+    let start = std::time::Instant::now();
+    let ints: Vec<Poly<Int>> = polys
+        .iter()
+        .filter(|p| !p.is_zero())
+        .map(|p| to_primitive_integer(ring, &p.reorder(ring)))
+        .collect();
+    // Candidate lifts keyed by their leading monomials (majority vote against unlucky primes).
+    let mut lifts: Vec<Lift> = Vec::new();
+    let mut stats = Stats::default();
+    let mut last_failed: Option<usize> = None;
+    for p in primes() {
+        // Skip primes dividing a leading coefficient (they change the leading monomials).
+        if ints
+            .iter()
+            .any(|f| f.lc().is_some_and(|c| (c % Int::from(p)).is_zero()))
+        {
+            continue;
+        }
+        let pm = Int::from(p);
+        let mods: Vec<Poly<Fp>> = ints
+            .iter()
+            .map(|f| {
+                let terms = f
+                    .terms()
+                    .iter()
+                    .map(|(m, c)| (m.clone(), Fp::new(0, p).add_int(&c.mod_floor(&pm))))
+                    .collect();
+                Poly::from_terms(ring, terms)
+            })
+            .collect();
+        let (basis, st) = groebner_in(ring, &mods, opts)?;
+        stats.pairs_created += st.pairs_created;
+        stats.removed_chain += st.removed_chain;
+        stats.removed_product += st.removed_product;
+        stats.pairs_reduced += st.pairs_reduced;
+        stats.zero_reductions += st.zero_reductions;
+        stats.reduction_steps += st.reduction_steps;
+        let lms: Vec<&Monomial> = basis.iter().map(|g| g.lm().expect("nonzero")).collect();
+        let k = match lifts.iter().position(|l| l.lms.iter().collect::<Vec<_>>() == lms) {
+            Some(k) => {
+                lifts[k].combine(&basis, p);
+                k
+            }
+            None => {
+                lifts.push(Lift::from_mod_p(&basis, p));
+                lifts.len() - 1
+            }
+        };
+        // Work with the lift backed by the most primes.
+        let best = (0..lifts.len()).max_by_key(|&i| lifts[i].primes).expect("nonempty");
+        if best != k || last_failed == Some(lifts[best].primes) {
+            continue;
+        }
+        let Some(candidate) = lifts[best].reconstruct(ring) else {
+            continue;
+        };
+        // Cheap test first: the candidate reduces to the basis mod a fresh prime is implied
+        // by verification; verification over Q decides.
+        let zbasis: Vec<Poly<ZInt>> = candidate
+            .iter()
+            .map(|g| to_primitive_integer(ring, g).map_coeffs(ring, to_zint))
+            .collect();
+        let zin: Vec<Poly<ZInt>> = ints.iter().map(|f| f.map_coeffs(ring, to_zint)).collect();
+        if check_groebner_basis(ring, &zbasis, &zin, opts)? {
+            let mut basis = candidate;
+            for g in basis.iter_mut() {
+                let lc = g.lc().cloned().unwrap_or_else(Rat::one);
+                *g = g.scale(&lc.recip());
+            }
+            basis.sort_by(|a, b| ring.cmp(a.lm().expect("nonzero"), b.lm().expect("nonzero")));
+            stats.basis_size = basis.len();
+            stats.time = start.elapsed();
+            return Ok((basis, stats));
+        }
+        last_failed = Some(lifts[best].primes);
+    }
+    unreachable!("there are infinitely many primes")
+}
+
+impl Fp {
+    fn add_int(self, x: &Int) -> Fp {
+        let v: u64 = x.try_into().unwrap_or(0);
+        Fp::new(0, self.modulus()).add_u64(v)
+    }
+    fn add_u64(self, v: u64) -> Fp {
+        use crate::coeff::Coeff;
+        let p = self.modulus();
+        self.add(&Fp::new((v % p) as i64, p))
+    }
+}
+
+#[allow(dead_code)]
+fn _assert_domain<D: Domain>() {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::groebner::groebner;
+    use crate::systems::{cyclic, katsura};
+
+    #[test]
+    fn rational_reconstruction_recovers_small_fractions() {
+        let m = Int::from(1_000_000_007u64) * Int::from(998_244_353u64);
+        for (n, d) in [(3i64, 7i64), (-22, 5), (1, 1), (0, 1), (123456, 789)] {
+            let r = Rat::new(Int::from(n), Int::from(d));
+            let a = (Int::from(n) * mod_inverse(&Int::from(d), &m)).mod_floor(&m);
+            assert_eq!(rational_reconstruction(&a, &m), Some(r));
+        }
+    }
+
+    #[test]
+    fn modular_equals_fraction_free() {
+        for (ring, polys) in [katsura(4), cyclic(5), katsura(5)] {
+            let o = GroebnerOptions::default();
+            let (a, _) = groebner_modular(&ring, &polys, &o).unwrap();
+            let b = groebner(&ring, &polys, &o).unwrap().basis;
+            assert_eq!(a, b);
+        }
+    }
+}
