@@ -37,8 +37,20 @@ fn main() {
         );
         return;
     }
+    let method = match args.get(3).map(String::as_str) {
+        Some("ff") => isoray_algebra::Method::FractionFree,
+        _ => isoray_algebra::Method::Auto,
+    };
     let t = std::time::Instant::now();
-    let r = groebner(&ring, &polys, &GroebnerOptions::default()).expect("no budget");
+    let r = groebner(
+        &ring,
+        &polys,
+        &GroebnerOptions {
+            method,
+            ..Default::default()
+        },
+    )
+    .expect("no budget");
     println!(
         "{kind}-{n}: {} elements in {:.3} s\n{}",
         r.basis.len(),

@@ -389,68 +389,61 @@ impl<'a, D: Domain> State<'a, D> {
     /// until the leading term is irreducible when `top_only`, else fully.
     fn reduce(&mut self, f: &Poly<D>, skip: Option<usize>, top_only: bool) -> Result<Poly<D>, GroebnerError> {
         let ring = self.ring;
-        let mut p = f.clone();
+        // p is kept in increasing order, so that its leading term is at the end.
+        let mut p: Vec<(Monomial, D)> = f.terms().iter().rev().cloned().collect();
         let mut rem: Vec<(Monomial, D)> = Vec::new();
         let mut steps_since_check = 0u32;
-        while let Some((lm, lc)) = p.terms().first().cloned() {
-            let lmask = mask(&lm);
+        while let Some((lm, lc)) = p.last() {
+            let lmask = mask(lm);
             let divisor = self.basis.iter().copied().filter(|&k| Some(k) != skip).find(|&k| {
                 let e = &self.polys[k];
-                e.mask & !lmask == 0 && e.poly.lm().is_some_and(|g| g.divides(&lm))
+                e.mask & !lmask == 0 && e.poly.lm().is_some_and(|g| g.divides(lm))
             });
-            match divisor {
-                Some(k) => {
-                    let g = &self.polys[k].poly;
-                    let (a, b) = D::cancel(&lc, g.lc().expect("nonzero"));
-                    let q = g.lm().expect("nonzero").quotient(&lm).expect("divides");
-                    let minus_b = b.neg();
-                    let scaled = g.mul_term(&q, &minus_b);
-                    let a_is_one = a.is_one();
-                    p = p.lin_comb(ring, if a_is_one { None } else { Some(&a) }, &scaled, None);
-                    if !a_is_one {
-                        for t in rem.iter_mut() {
-                            t.1 = t.1.mul(&a);
-                        }
-                    }
-                    self.stats.reduction_steps += 1;
-                    steps_since_check += 1;
-                    if steps_since_check >= 64 {
-                        steps_since_check = 0;
-                        // Keep coefficients small during long reductions.
-                        let mut all: Vec<D> = rem
-                            .iter()
-                            .map(|t| t.1.clone())
-                            .chain(p.terms().iter().map(|t| t.1.clone()))
-                            .collect();
-                        if !all.is_empty() && D::FRACTION_FREE {
-                            let before = all.clone();
-                            D::normalize(&mut all);
-                            if all != before {
-                                let (r2, p2) = all.split_at(rem.len());
-                                for (t, c) in rem.iter_mut().zip(r2) {
-                                    t.1 = c.clone();
-                                }
-                                let terms: Vec<(Monomial, D)> = p
-                                    .terms()
-                                    .iter()
-                                    .zip(p2)
-                                    .map(|(t, c)| (t.0.clone(), c.clone()))
-                                    .collect();
-                                p = Poly::from_sorted(terms);
-                            }
-                        }
-                        self.check()?;
-                    }
-                }
-                None if top_only => {
-                    rem.extend(p.into_terms());
+            let Some(k) = divisor else {
+                if top_only {
+                    rem.extend(p.drain(..).rev());
                     break;
                 }
-                None => {
-                    rem.push((lm, lc));
-                    let rest: Vec<(Monomial, D)> = p.into_terms().into_iter().skip(1).collect();
-                    p = Poly::from_sorted(rest);
+                rem.push(p.pop().expect("nonempty"));
+                continue;
+            };
+            let g = &self.polys[k].poly;
+            let (a, b) = D::cancel(lc, g.lc().expect("nonzero"));
+            let q = g.lm().expect("nonzero").quotient(lm).expect("divides");
+            let minus_b = b.neg();
+            p.pop(); // the leading terms cancel
+            if !a.is_one() {
+                for t in p.iter_mut() {
+                    t.1 = t.1.mul(&a);
                 }
+                for t in rem.iter_mut() {
+                    t.1 = t.1.mul(&a);
+                }
+            }
+            let tail = g.terms()[1..].iter().rev().map(|(m, c)| (m.mul(&q), c.mul(&minus_b)));
+            p = merge_ascending(ring, p, tail);
+            self.stats.reduction_steps += 1;
+            steps_since_check += 1;
+            if steps_since_check >= 64 {
+                steps_since_check = 0;
+                if D::FRACTION_FREE {
+                    // Keep coefficients small during long reductions.
+                    let mut all: Vec<D> = rem.iter().chain(p.iter()).map(|t| t.1.clone()).collect();
+                    if !all.is_empty() {
+                        let first = all[0].clone();
+                        D::normalize(&mut all);
+                        if all[0] != first {
+                            let (r2, p2) = all.split_at(rem.len());
+                            for (t, c) in rem.iter_mut().zip(r2) {
+                                t.1 = c.clone();
+                            }
+                            for (t, c) in p.iter_mut().zip(p2) {
+                                t.1 = c.clone();
+                            }
+                        }
+                    }
+                }
+                self.check()?;
             }
         }
         Ok(Poly::from_sorted(rem))
@@ -571,6 +564,44 @@ pub fn check_groebner_basis<D: Domain>(
         }
     }
     Ok(true)
+}
+
+/// Merges two increasing term lists, adding coefficients of equal monomials.
+fn merge_ascending<D: Domain>(
+    ring: &Ring,
+    p: Vec<(Monomial, D)>,
+    q: impl Iterator<Item = (Monomial, D)>,
+) -> Vec<(Monomial, D)> {
+    let mut out = Vec::with_capacity(p.len() + 8);
+    let mut p = p.into_iter().peekable();
+    let mut q = q.peekable();
+    loop {
+        let ord = match (p.peek(), q.peek()) {
+            (Some(a), Some(b)) => ring.cmp(&a.0, &b.0),
+            (Some(_), None) => {
+                out.extend(p);
+                break;
+            }
+            (None, Some(_)) => {
+                out.extend(q);
+                break;
+            }
+            (None, None) => break,
+        };
+        match ord {
+            std::cmp::Ordering::Less => out.push(p.next().expect("peeked")),
+            std::cmp::Ordering::Greater => out.push(q.next().expect("peeked")),
+            std::cmp::Ordering::Equal => {
+                let (m, c) = p.next().expect("peeked");
+                let (_, d) = q.next().expect("peeked");
+                let s = c.add(&d);
+                if !s.is_zero() {
+                    out.push((m, s));
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The normal form of f modulo a Gröbner basis over Q (the remainder of
