@@ -266,24 +266,31 @@ impl Coeff for Fp {
         self.v == 1
     }
     fn add(&self, o: &Self) -> Self {
-        let s = self.v as u128 + o.v as u128;
+        // Both below p < 2^63: the sum fits in u64.
+        let s = self.v + o.v;
         Fp {
-            v: (s % self.p as u128) as u64,
+            v: if s >= self.p { s - self.p } else { s },
             p: self.p,
         }
     }
     fn sub(&self, o: &Self) -> Self {
-        let s = self.v as u128 + self.p as u128 - o.v as u128;
         Fp {
-            v: (s % self.p as u128) as u64,
+            v: if self.v >= o.v {
+                self.v - o.v
+            } else {
+                self.v + (self.p - o.v)
+            },
             p: self.p,
         }
     }
     fn mul(&self, o: &Self) -> Self {
-        Fp {
-            v: ((self.v as u128 * o.v as u128) % self.p as u128) as u64,
-            p: self.p,
-        }
+        // Word-size primes below 2^32 multiply in u64; larger ones in u128.
+        let v = if self.p <= 1 << 32 {
+            (self.v * o.v) % self.p
+        } else {
+            ((self.v as u128 * o.v as u128) % self.p as u128) as u64
+        };
+        Fp { v, p: self.p }
     }
     fn neg(&self) -> Self {
         Fp {
