@@ -19,7 +19,7 @@
 # implicitize`).
 #
 # Times are taken inside each program, start-up and input parsing excluded:
-#   isoray:   the `time: X s` line of --stats (printed with 1 ms resolution);
+#   isoray:   the `time: X s` line of --stats (printed with 1 µs resolution);
 #   Singular: bench/singular/timing.sh (rtimer around std/eliminate). timing.sh
 #             repeats a case until a batch lasts MIN_MS; here MIN_MS defaults to
 #             0 (one computation per process, like isoray). MIN_MS=1000 gives
@@ -262,11 +262,11 @@ for c in "${cases[@]}"; do
   elif [ -z "$iso_bad" ] && [ -z "$sing_bad" ]; then
     ratio="$(awk -v a="$im" -v b="$sm" 'BEGIN {
       if (b <= 0) print "n/a";
-      else if (a < 0.5) printf "< %.2g", 0.5 / b;
+      else if (a <= 0) printf "< %.2g", 0.001 / b;
       else printf "%.2f", a / b }')"
   fi
-  # isoray prints its time in whole ms
-  [ -n "$iso_bad" ] || im="$(awk -v a="$im" 'BEGIN { if (a < 0.5) print "< 0.5"; else printf "%.0f", a }')"
+  # isoray prints its time in microseconds
+  [ -n "$iso_bad" ] || im="$(awk -v a="$im" 'BEGIN { if (a >= 10) printf "%.0f", a; else printf "%.3f", a }')"
   [ -n "$iso_bad" ] || [ -n "$match" ] || match="?"
   name="$c"; [ "$c" = startup ] && name="(start-up)"
   ROWS+=("| $name | $im | $sm | $ratio | $irss | $srss | $match |")
@@ -292,7 +292,7 @@ report() {
   echo "- Singular: $(Singular --version 2>&1 | head -n1)"
   echo
   echo "Medians of $REPS runs per tool, run alternately (isoray, Singular, isoray, ...), one process each."
-  echo "Times are measured inside each program, excluding start-up and parsing: isoray's \`--stats\` \`time:\` (1 ms resolution),"
+  echo "Times are measured inside each program, excluding start-up and parsing: isoray's \`--stats\` \`time:\` (1 µs resolution),"
   echo "Singular's rtimer around \`std\`/\`eliminate\` (bench/singular/timing.sh, MIN_MS=$MIN_MS$([ "$MIN_MS" -gt 0 ] && echo ': mean of a batch of repeated runs' || echo ': one computation per process'))."
   echo "Peak RSS: whole process (start-up included), from \`/usr/bin/time -v\`."
   echo "Gröbner cases: reduced basis over Q, grevlex. Match: isoray's output vs crates/isoray-algebra/tests/data (Singular's result)."

@@ -173,6 +173,9 @@ impl Field for Rat {
 
 impl Domain for Rat {
     fn cancel(c: &Self, d: &Self) -> (Self, Self) {
+        if One::is_one(d) {
+            return (Rat::one(), c.clone());
+        }
         (Rat::one(), c / d)
     }
     fn normalize(coeffs: &mut [Self]) {
@@ -315,6 +318,10 @@ impl Field for Fp {
 
 impl Domain for Fp {
     fn cancel(c: &Self, d: &Self) -> (Self, Self) {
+        // Basis elements are monic: no inversion needed then.
+        if d.is_one() {
+            return (c.one_like(), *c);
+        }
         (c.one_like(), c.div(d))
     }
     fn normalize(coeffs: &mut [Self]) {

@@ -11,11 +11,23 @@ pub struct Monomial {
     deg: u32,
 }
 
+/// Copies exponents: a plain array copy when they fit inline (SmallVec's own
+/// `clone` and `from_slice` extend element by element).
+#[inline]
+fn copy_exps(e: &[u16]) -> SmallVec<[u16; 8]> {
+    if e.len() <= 8 {
+        let mut buf = [0u16; 8];
+        buf[..e.len()].copy_from_slice(e);
+        SmallVec::from_buf_and_len(buf, e.len())
+    } else {
+        SmallVec::from_slice(e)
+    }
+}
+
 impl Clone for Monomial {
     fn clone(&self) -> Self {
-        // `from_slice` copies with memcpy; SmallVec's own `clone` extends element by element.
         Monomial {
-            exps: SmallVec::from_slice(&self.exps),
+            exps: copy_exps(&self.exps),
             deg: self.deg,
         }
     }
@@ -33,7 +45,7 @@ impl Monomial {
     /// From an exponent vector.
     pub fn new(exps: &[u16]) -> Self {
         Monomial {
-            exps: SmallVec::from_slice(exps),
+            exps: copy_exps(exps),
             deg: exps.iter().map(|&e| e as u32).sum(),
         }
     }
@@ -94,7 +106,7 @@ impl Monomial {
         if !self.divides(o) {
             return None;
         }
-        let mut exps: SmallVec<[u16; 8]> = SmallVec::from_slice(&o.exps);
+        let mut exps = copy_exps(&o.exps);
         for (b, a) in exps.iter_mut().zip(&self.exps) {
             *b -= a;
         }
@@ -106,7 +118,7 @@ impl Monomial {
 
     /// Least common multiple.
     pub fn lcm(&self, o: &Monomial) -> Monomial {
-        let mut exps: SmallVec<[u16; 8]> = SmallVec::from_slice(&self.exps);
+        let mut exps = copy_exps(&self.exps);
         let mut deg = 0;
         for (a, b) in exps.iter_mut().zip(&o.exps) {
             *a = (*a).max(*b);
@@ -117,7 +129,7 @@ impl Monomial {
 
     /// Greatest common divisor.
     pub fn gcd(&self, o: &Monomial) -> Monomial {
-        let mut exps: SmallVec<[u16; 8]> = SmallVec::from_slice(&self.exps);
+        let mut exps = copy_exps(&self.exps);
         let mut deg = 0;
         for (a, b) in exps.iter_mut().zip(&o.exps) {
             *a = (*a).min(*b);
