@@ -37,6 +37,10 @@ pub trait Coeff: Clone + PartialEq + Eq + Debug + Display + Send + Sync + 'stati
     fn neg(&self) -> Self;
     /// True when the printed form starts with a minus sign.
     fn is_negative(&self) -> bool;
+    /// Size in bits of the magnitude (0 where that means nothing, as in GF(p)).
+    fn bit_len(&self) -> usize {
+        0
+    }
 }
 
 /// Domains that Buchberger's algorithm runs over: fields, and Z in
@@ -414,6 +418,10 @@ impl Coeff for ZInt {
     }
     fn is_negative(&self) -> bool {
         self < &ZInt::ZERO
+    }
+    fn bit_len(&self) -> usize {
+        use dashu_base::{BitTest, UnsignedAbs};
+        self.unsigned_abs().bit_len()
     }
 }
 

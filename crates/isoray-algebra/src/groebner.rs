@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 
 use num_traits::One;
 
-use crate::coeff::{from_zint, to_zint, Domain, Rat, ZInt};
+use crate::coeff::{from_zint, to_zint, Coeff, Domain, Rat, ZInt};
 use crate::monomial::Monomial;
 use crate::parse::{to_primitive_integer, to_rational};
 use crate::poly::{Poly, Ring};
@@ -56,8 +56,8 @@ pub struct GroebnerOptions {
 /// How [`groebner`] computes a basis over Q.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Method {
-    /// Run the fraction-free and the multi-modular computations side by side
-    /// (two threads) and keep the first to finish; the other is cancelled.
+    /// Fraction-free, switching to multi-modular when intermediate
+    /// coefficients grow large.
     #[default]
     Auto,
     /// Fraction-free Buchberger over Z.
@@ -123,6 +123,13 @@ pub enum GroebnerError {
         /// Work done until then.
         stats: Stats,
     },
+    /// Intermediate coefficients grew past the bound of [`Method::Auto`]'s
+    /// fraction-free attempt (internal: Auto then switches methods).
+    #[error("coefficients grew to {bits} bits")]
+    CoefficientGrowth {
+        /// The size reached.
+        bits: u64,
+    },
     /// The interrupt flag was set.
     #[error("interrupted after {} reduction steps", stats.reduction_steps)]
     Interrupted {
@@ -148,64 +155,62 @@ pub fn groebner(ring: &Ring, polys: &[Poly<Rat>], opts: &GroebnerOptions) -> Res
         Method::Modular => {
             crate::modular::groebner_modular(ring, polys, opts).map(|(basis, stats)| GroebnerResult { basis, stats })
         }
-        Method::Auto => race(ring, polys, opts),
+        Method::Auto => auto(ring, polys, opts),
     }
 }
 
-/// Runs both methods in parallel; the first result wins and the other is cancelled.
-fn race(ring: &Ring, polys: &[Poly<Rat>], opts: &GroebnerOptions) -> Result<GroebnerResult, GroebnerError> {
-    let stop = Arc::new(AtomicBool::new(false));
-    let sub = |method| GroebnerOptions {
-        method,
-        budget: Budget {
-            interrupt: Some(stop.clone()),
-            ..opts.budget.clone()
-        },
-        ..opts.clone()
-    };
-    let (ff, md) = (sub(Method::FractionFree), sub(Method::Modular));
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::scope(|scope| {
-        let tx2 = tx.clone();
-        scope.spawn(|| {
-            let _ = tx.send(groebner(ring, polys, &ff));
-        });
-        scope.spawn(move || {
-            let _ = tx2.send(groebner(ring, polys, &md));
-        });
-        let mut first_err = None;
-        for _ in 0..2 {
-            // Forward a user interrupt to both computations.
-            let r = loop {
-                match rx.recv_timeout(Duration::from_millis(20)) {
-                    Ok(r) => break r,
-                    Err(_) => {
-                        if opts
-                            .budget
-                            .interrupt
-                            .as_ref()
-                            .is_some_and(|f| f.load(AtomicOrdering::Relaxed))
-                        {
-                            stop.store(true, AtomicOrdering::Relaxed);
-                        }
-                    }
-                }
-            };
-            match r {
-                Ok(res) => {
-                    stop.store(true, AtomicOrdering::Relaxed);
-                    return Ok(res);
-                }
-                Err(e) => {
-                    if first_err.is_none() {
-                        first_err = Some(e);
-                    }
-                }
-            }
+/// Fraction-free first; if intermediate coefficients grow past a bound
+/// (max(256, 4 × the inputs' largest coefficient) bits) the computation
+/// switches to the multi-modular method, whose cost does not depend on them.
+fn auto(ring: &Ring, polys: &[Poly<Rat>], opts: &GroebnerOptions) -> Result<GroebnerResult, GroebnerError> {
+    let start = Instant::now();
+    let ints = primitive_inputs(ring, polys);
+    let input_bits = ints
+        .iter()
+        .flat_map(|p| p.terms().iter().map(|t| Coeff::bit_len(&t.1)))
+        .max()
+        .unwrap_or(0) as u64;
+    let limit = GrowthLimit(256.max(4 * input_bits));
+    match groebner_in_limited(ring, &ints, opts, Some(limit)) {
+        Ok((basis, stats)) => Ok(GroebnerResult {
+            basis: monic_rationals(ring, &basis),
+            stats,
+        }),
+        Err(GroebnerError::CoefficientGrowth { .. }) => {
+            crate::modular::groebner_modular(ring, polys, opts).map(|(basis, stats)| GroebnerResult {
+                basis,
+                // The time includes the abandoned fraction-free attempt.
+                stats: Stats {
+                    time: start.elapsed(),
+                    ..stats
+                },
+            })
         }
-        Err(first_err.expect("two results were received"))
-    })
+        Err(e) => Err(e),
+    }
 }
+
+fn primitive_inputs(ring: &Ring, polys: &[Poly<Rat>]) -> Vec<Poly<ZInt>> {
+    polys
+        .iter()
+        .map(|p| to_primitive_integer(ring, &p.reorder(ring)).map_coeffs(ring, to_zint))
+        .collect()
+}
+
+fn monic_rationals(ring: &Ring, basis: &[Poly<ZInt>]) -> Vec<Poly<Rat>> {
+    basis
+        .iter()
+        .map(|p| {
+            let q = to_rational(&p.map_coeffs(ring, from_zint));
+            let lc = q.lc().cloned().unwrap_or_else(Rat::one);
+            q.scale(&lc.recip())
+        })
+        .collect()
+}
+
+/// Abort a fraction-free run when a new element has a coefficient of more bits than this.
+#[derive(Debug, Clone, Copy)]
+struct GrowthLimit(u64);
 
 /// The reduced Gröbner basis over Q, computed fraction-free over Z.
 pub fn groebner_fraction_free(
@@ -213,20 +218,11 @@ pub fn groebner_fraction_free(
     polys: &[Poly<Rat>],
     opts: &GroebnerOptions,
 ) -> Result<GroebnerResult, GroebnerError> {
-    let ints: Vec<Poly<ZInt>> = polys
-        .iter()
-        .map(|p| to_primitive_integer(ring, &p.reorder(ring)).map_coeffs(ring, to_zint))
-        .collect();
-    let (basis, stats) = groebner_in(ring, &ints, opts)?;
-    let basis = basis
-        .iter()
-        .map(|p| {
-            let q = to_rational(&p.map_coeffs(ring, from_zint));
-            let lc = q.lc().cloned().unwrap_or_else(Rat::one);
-            q.scale(&lc.recip())
-        })
-        .collect();
-    Ok(GroebnerResult { basis, stats })
+    let (basis, stats) = groebner_in(ring, &primitive_inputs(ring, polys), opts)?;
+    Ok(GroebnerResult {
+        basis: monic_rationals(ring, &basis),
+        stats,
+    })
 }
 
 /// The reduced Gröbner basis over any [`Domain`] (Z fraction-free, Q, GF(p)):
@@ -236,7 +232,24 @@ pub fn groebner_in<D: Domain>(
     polys: &[Poly<D>],
     opts: &GroebnerOptions,
 ) -> Result<(Vec<Poly<D>>, Stats), GroebnerError> {
-    let mut st = State::new(ring, opts);
+    groebner_traced(ring, polys, opts).map(|(b, s, _)| (b, s))
+}
+
+/// A basis with the statistics of its computation.
+pub type Basis<D> = (Vec<Poly<D>>, Stats);
+
+/// The useful work of a Buchberger run: the S-pairs (by element index) that
+/// gave new basis elements, in order, and the leading monomial each gave.
+/// Replaying it modulo another prime skips every reduction to zero
+/// (Traverso's Gröbner trace).
+#[derive(Debug, Clone, Default)]
+pub struct Trace {
+    inputs: Vec<Monomial>,
+    steps: Vec<(usize, usize, Monomial)>,
+}
+
+/// Inputs, normalised, nonzero, in the order a run inserts them.
+fn prepared_inputs<D: Domain>(ring: &Ring, polys: &[Poly<D>]) -> Vec<Poly<D>> {
     let mut inputs: Vec<Poly<D>> = polys
         .iter()
         .filter(|p| !p.is_zero())
@@ -244,11 +257,42 @@ pub fn groebner_in<D: Domain>(
         .collect();
     // Small leading monomials first: fewer pairs survive the criteria.
     inputs.sort_by(|a, b| ring.cmp(a.lm().expect("nonzero"), b.lm().expect("nonzero")));
-    for p in inputs {
+    inputs
+}
+
+/// [`groebner_in`], also returning the run's [`Trace`].
+pub fn groebner_traced<D: Domain>(
+    ring: &Ring,
+    polys: &[Poly<D>],
+    opts: &GroebnerOptions,
+) -> Result<(Vec<Poly<D>>, Stats, Trace), GroebnerError> {
+    run(ring, polys, opts, None)
+}
+
+fn groebner_in_limited<D: Domain>(
+    ring: &Ring,
+    polys: &[Poly<D>],
+    opts: &GroebnerOptions,
+    limit: Option<GrowthLimit>,
+) -> Result<(Vec<Poly<D>>, Stats), GroebnerError> {
+    run(ring, polys, opts, limit).map(|(b, s, _)| (b, s))
+}
+
+fn run<D: Domain>(
+    ring: &Ring,
+    polys: &[Poly<D>],
+    opts: &GroebnerOptions,
+    limit: Option<GrowthLimit>,
+) -> Result<(Vec<Poly<D>>, Stats, Trace), GroebnerError> {
+    let mut st = State::new(ring, opts);
+    let mut trace = Trace::default();
+    for p in prepared_inputs(ring, polys) {
         let h = st.reduce_full(&p, None)?;
         if !h.is_zero() {
             let sugar = p.degree() as u32;
-            st.update(h.normalized(), sugar);
+            let h = h.normalized();
+            trace.inputs.push(h.lm().expect("nonzero").clone());
+            st.update(h, sugar);
         }
     }
     while let Some(pair) = st.select() {
@@ -260,12 +304,76 @@ pub fn groebner_in<D: Domain>(
             st.stats.zero_reductions += 1;
             continue;
         }
-        st.update(h.normalized(), pair.sugar);
+        let h = h.normalized();
+        if let Some(GrowthLimit(bits)) = limit {
+            let grown = h.terms().iter().map(|t| t.1.bit_len()).max().unwrap_or(0) as u64;
+            if grown > bits {
+                return Err(GroebnerError::CoefficientGrowth { bits: grown });
+            }
+        }
+        trace.steps.push((pair.i, pair.j, h.lm().expect("nonzero").clone()));
+        st.update(h, pair.sugar);
     }
     let basis = st.interreduce()?;
     st.stats.basis_size = basis.len();
     st.stats.time = st.start.elapsed();
-    Ok((basis, st.stats))
+    Ok((basis, st.stats, trace))
+}
+
+/// Replays a [`Trace`] on the same inputs over another domain (another prime).
+/// Returns `None` when the run diverges from the trace (an unlucky prime);
+/// the caller then computes normally.
+pub fn groebner_replay<D: Domain>(
+    ring: &Ring,
+    polys: &[Poly<D>],
+    trace: &Trace,
+    opts: &GroebnerOptions,
+) -> Result<Option<Basis<D>>, GroebnerError> {
+    let mut st = State::new(ring, opts);
+    let inputs = prepared_inputs(ring, polys);
+    let mut k = 0;
+    for p in inputs {
+        let h = st.reduce_full(&p, None)?;
+        if h.is_zero() {
+            continue;
+        }
+        let h = h.normalized();
+        if trace.inputs.get(k) != h.lm() {
+            return Ok(None);
+        }
+        k += 1;
+        st.insert(h);
+    }
+    if k != trace.inputs.len() {
+        return Ok(None);
+    }
+    for (i, j, lm) in &trace.steps {
+        st.check()?;
+        let (Some(a), Some(b)) = (st.polys.get(*i), st.polys.get(*j)) else {
+            return Ok(None);
+        };
+        let lcm = a.poly.lm().expect("nonzero").lcm(b.poly.lm().expect("nonzero"));
+        let s = st.spoly(&Pair {
+            i: *i,
+            j: *j,
+            lcm,
+            sugar: 0,
+        });
+        st.stats.pairs_reduced += 1;
+        let h = st.reduce_full(&s, None)?;
+        if h.is_zero() {
+            return Ok(None);
+        }
+        let h = h.normalized();
+        if h.lm() != Some(lm) {
+            return Ok(None);
+        }
+        st.insert(h);
+    }
+    let basis = st.interreduce()?;
+    st.stats.basis_size = basis.len();
+    st.stats.time = st.start.elapsed();
+    Ok(Some((basis, st.stats)))
 }
 
 struct Pair {
@@ -447,6 +555,21 @@ impl<'a, D: Domain> State<'a, D> {
             }
         }
         Ok(Poly::from_sorted(rem))
+    }
+
+    /// Adds a basis element without creating pairs (for trace replays).
+    fn insert(&mut self, h: Poly<D>) {
+        let hm = h.lm().expect("nonzero").clone();
+        let new = self.polys.len();
+        self.polys.push(Element {
+            mask: mask(&hm),
+            poly: h,
+            sugar: 0,
+        });
+        let polys = &self.polys;
+        self.basis
+            .retain(|&g| !hm.divides(polys[g].poly.lm().expect("nonzero")));
+        self.basis.push(new);
     }
 
     /// Gebauer–Möller installation of a new basis element.

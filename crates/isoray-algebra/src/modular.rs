@@ -13,7 +13,9 @@ use num_integer::Integer;
 use num_traits::{One, Signed, Zero};
 
 use crate::coeff::{is_prime, to_zint, Domain, Fp, Int, Rat, ZInt};
-use crate::groebner::{check_groebner_basis, groebner_in, GroebnerError, GroebnerOptions, Stats};
+use crate::groebner::{
+    check_groebner_basis, groebner_in, groebner_replay, groebner_traced, GroebnerError, GroebnerOptions, Stats,
+};
 use crate::monomial::Monomial;
 use crate::parse::to_primitive_integer;
 use crate::poly::{Poly, Ring};
@@ -135,6 +137,7 @@ pub fn groebner_modular(
     let mut lifts: Vec<Lift> = Vec::new();
     let mut stats = Stats::default();
     let mut last_failed: Option<usize> = None;
+    let mut trace = None;
     for p in primes() {
         // Skip primes dividing a leading coefficient (they change the leading monomials).
         if ints
@@ -155,7 +158,18 @@ pub fn groebner_modular(
                 Poly::from_terms(ring, terms)
             })
             .collect();
-        let (basis, st) = groebner_in(ring, &mods, opts)?;
+        // The first prime records its useful S-pairs; later primes replay them.
+        let (basis, st) = match &trace {
+            None => {
+                let (b, st, t) = groebner_traced(ring, &mods, opts)?;
+                trace = Some(t);
+                (b, st)
+            }
+            Some(t) => match groebner_replay(ring, &mods, t, opts)? {
+                Some(r) => r,
+                None => groebner_in(ring, &mods, opts)?,
+            },
+        };
         stats.pairs_created += st.pairs_created;
         stats.removed_chain += st.removed_chain;
         stats.removed_product += st.removed_product;
