@@ -61,6 +61,9 @@ pub enum ImplicitError {
         /// The generators found, printed.
         found: String,
     },
+    /// Interpolation found no (verified) equation.
+    #[error("interpolation failed: {0}")]
+    Interpolation(String),
     /// The Gröbner computation stopped (time, work or interrupt).
     #[error(transparent)]
     Groebner(#[from] GroebnerError),

@@ -22,6 +22,7 @@ pub mod fglm;
 pub mod groebner;
 pub mod ideal;
 pub mod implicit;
+pub mod interp;
 pub mod modular;
 pub mod monomial;
 pub mod parse;

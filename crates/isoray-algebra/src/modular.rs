@@ -115,7 +115,8 @@ impl Lift {
     }
 }
 
-fn mod_inverse(a: &Int, p: &Int) -> Int {
+/// a⁻¹ mod p.
+pub fn mod_inverse(a: &Int, p: &Int) -> Int {
     let e = a.extended_gcd(p);
     e.x.mod_floor(p)
 }

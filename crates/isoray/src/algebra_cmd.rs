@@ -179,9 +179,9 @@ pub fn cmd_implicitize(
     stats: bool,
     timeout: Option<f64>,
 ) -> Result<(), Failure> {
-    if !matches!(method, "auto" | "groebner") {
+    if !matches!(method, "auto" | "groebner" | "interpolation") {
         return Err(bad(format!(
-            "--method: expected auto or groebner (interpolation is not available yet), found `{method}`"
+            "--method: expected auto, groebner or interpolation, found `{method}`"
         )));
     }
     let coords: Vec<&str> = match z {
@@ -195,7 +195,36 @@ pub fn cmd_implicitize(
     };
     let params: Vec<&str> = params.unwrap_or(&default_params).iter().map(|s| s.as_str()).collect();
     let opts = options(timeout)?;
-    match implicitize_groebner(&coords, &params, &opts) {
+    let interp = |time| {
+        isoray_algebra::interp::implicitize_interpolation(
+            &coords,
+            &params,
+            &isoray_algebra::interp::InterpolationOptions {
+                time,
+                ..Default::default()
+            },
+        )
+    };
+    let result = match method {
+        "groebner" => implicitize_groebner(&coords, &params, &opts),
+        "interpolation" => interp(opts.budget.time),
+        _ => {
+            // Elimination first, with a few seconds; interpolation for what it cannot finish.
+            let quick = Duration::from_secs(5).min(opts.budget.time.unwrap_or(Duration::MAX));
+            let first = GroebnerOptions {
+                budget: Budget {
+                    time: Some(quick),
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            match implicitize_groebner(&coords, &params, &first) {
+                Err(ImplicitError::Groebner(_)) => interp(opts.budget.time.map(|t| t.saturating_sub(quick))),
+                other => other,
+            }
+        }
+    };
+    match result {
         Ok(imp) => {
             println!("{}", imp.display());
             if stats {

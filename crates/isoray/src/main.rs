@@ -100,7 +100,7 @@ enum Command {
         /// Parameters (default s,t for surfaces, t for curves).
         #[arg(long, value_delimiter = ',')]
         params: Option<Vec<String>>,
-        /// auto or groebner.
+        /// auto (elimination, then interpolation if it takes too long), groebner or interpolation.
         #[arg(long, default_value = "auto")]
         method: String,
         /// Print statistics to stderr.

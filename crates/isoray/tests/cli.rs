@@ -271,3 +271,29 @@ fn implicitize_command() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("uses the variable `x`"), "{}", stderr(&o));
 }
+
+#[test]
+fn implicitize_by_interpolation_agrees_with_elimination() {
+    let args = [
+        "--x",
+        "s^2*t + s - t",
+        "--y",
+        "s*t^2 - t + 1",
+        "--z",
+        "s^2*t^2 + s*t + s",
+    ];
+    let a = run(isoray()
+        .arg("implicitize")
+        .args(args)
+        .args(["--method", "interpolation"]));
+    let b = run(isoray().arg("implicitize").args(args).args(["--method", "groebner"]));
+    assert!(
+        a.status.success() && b.status.success(),
+        "{} {}",
+        stderr(&a),
+        stderr(&b)
+    );
+    assert_eq!(a.stdout, b.stdout);
+    let o = run(isoray().args(["implicitize", "--method", "fourier", "--x", "s", "--y", "t", "--z", "s"]));
+    assert_eq!(o.status.code(), Some(2));
+}
