@@ -10,7 +10,7 @@
 //! larger than that bidegree in each parameter.
 
 use num_integer::Integer;
-use num_traits::{One, ToPrimitive, Zero};
+use num_traits::{ToPrimitive, Zero};
 
 use crate::coeff::{is_prime, Int, Rat};
 use crate::implicit::{coordinate_names, parse_parametrization, Implicit, ImplicitError};
@@ -353,11 +353,6 @@ fn verify(f: &Poly<Int>, funcs: &[RatFunc], d: u32, np: usize) -> bool {
             k += 1;
         }
     }
-}
-
-#[allow(dead_code)]
-fn _unused() -> Int {
-    Int::one()
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use num_integer::Integer;
 use num_traits::{One, Signed, Zero};
 
-use crate::coeff::{is_prime, to_zint, Domain, Fp, Int, Rat, ZInt};
+use crate::coeff::{is_prime, to_zint, Fp, Int, Rat, ZInt};
 use crate::groebner::{
     check_groebner_basis, groebner_in, groebner_replay, groebner_traced, GroebnerError, GroebnerOptions, Stats,
 };
@@ -230,9 +230,6 @@ impl Fp {
         self.add(&Fp::new((v % p) as i64, p))
     }
 }
-
-#[allow(dead_code)]
-fn _assert_domain<D: Domain>() {}
 
 #[cfg(test)]
 mod tests {
