@@ -19,6 +19,7 @@
 
 pub mod coeff;
 pub mod fglm;
+pub mod gcd;
 pub mod groebner;
 pub mod ideal;
 pub mod implicit;

@@ -87,8 +87,9 @@ pub fn resultant(ring: &Ring, f: &Poly<Rat>, g: &Poly<Rat>, v: usize) -> Poly<Ra
 
 /// Implicitizes a plane curve x = f₁/q₁, y = f₂/q₂ (in one parameter) by
 /// Res_t(q₁x − f₁, q₂y − f₂), as a primitive integer polynomial in (x, y).
-/// The resultant can carry extra factors or a power when the
-/// parametrization is not proper; the Gröbner route does not.
+/// The resultant is a power of the implicit equation when the
+/// parametrization is not proper (it covers the curve k times); the repeated
+/// factors are stripped with [`crate::gcd::squarefree`].
 pub fn implicitize_curve_resultant(x: &str, y: &str, param: &str) -> Result<Poly<Int>, crate::implicit::ImplicitError> {
     let funcs = crate::implicit::parse_parametrization(&[x, y], &[param])?;
     let ring = Ring::new(&[param, "x", "y"], MonomialOrder::DegRevLex);

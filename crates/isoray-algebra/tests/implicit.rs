@@ -88,7 +88,7 @@ fn resultant_cross_checks_groebner_for_plane_curves() {
     ] {
         let g = implicitize_groebner(&[x, y], &["t"], &GroebnerOptions::default()).unwrap();
         let r = implicitize_curve_resultant(x, y, "t").unwrap();
-        // For these proper parametrizations the resultant is the implicit equation itself, up to sign.
+        // Up to sign, the square-free resultant is the implicit equation.
         let neg = isoray_algebra::Poly::from_sorted(r.terms().iter().map(|(m, c)| (m.clone(), -c)).collect());
         assert!(
             r == g.poly || neg == g.poly,
