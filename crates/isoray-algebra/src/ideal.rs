@@ -174,6 +174,22 @@ pub fn quotient(
     Ok(acc.unwrap_or_else(|| vec![Poly::constant(ring, one())]))
 }
 
+/// A reduced basis of I + ⟨1 − y·f⟩ in a ring with the new variable y in front
+/// (block order eliminating y), with that ring.
+fn rabinowitsch(
+    ring: &Ring,
+    i: &[Poly<Rat>],
+    f: &Poly<Rat>,
+    opts: &GroebnerOptions,
+) -> Result<(Ring, Vec<Poly<Rat>>), GroebnerError> {
+    let (big, map) = with_front_var(ring, "y");
+    let y = Poly::monomial(Monomial::var(big.nvars(), 0, 1), one());
+    let mut all: Vec<Poly<Rat>> = i.iter().map(|p| p.embed(&big, &map)).collect();
+    all.push(Poly::constant(&big, one()).sub(&big, &y.mul(&big, &f.embed(&big, &map))));
+    let basis = groebner(&big, &all, opts)?.basis;
+    Ok((big, basis))
+}
+
 /// I : f^∞, by eliminating y from I + ⟨1 − y·f⟩.
 pub fn saturation(
     ring: &Ring,
@@ -181,11 +197,7 @@ pub fn saturation(
     f: &Poly<Rat>,
     opts: &GroebnerOptions,
 ) -> Result<Vec<Poly<Rat>>, GroebnerError> {
-    let (big, map) = with_front_var(ring, "y");
-    let y = Poly::monomial(Monomial::var(big.nvars(), 0, 1), one());
-    let mut all: Vec<Poly<Rat>> = i.iter().map(|p| p.embed(&big, &map)).collect();
-    all.push(Poly::constant(&big, one()).sub(&big, &y.mul(&big, &f.embed(&big, &map))));
-    let basis = groebner(&big, &all, opts)?.basis;
+    let (big, basis) = rabinowitsch(ring, i, f, opts)?;
     Ok(project(&big, 1, ring, &basis))
 }
 
@@ -196,11 +208,7 @@ pub fn radical_contains(
     f: &Poly<Rat>,
     opts: &GroebnerOptions,
 ) -> Result<bool, GroebnerError> {
-    let (big, map) = with_front_var(ring, "y");
-    let y = Poly::monomial(Monomial::var(big.nvars(), 0, 1), one());
-    let mut all: Vec<Poly<Rat>> = i.iter().map(|p| p.embed(&big, &map)).collect();
-    all.push(Poly::constant(&big, one()).sub(&big, &y.mul(&big, &f.embed(&big, &map))));
-    let basis = groebner(&big, &all, opts)?.basis;
+    let (_, basis) = rabinowitsch(ring, i, f, opts)?;
     Ok(basis.len() == 1 && basis[0].is_constant() && !basis[0].is_zero())
 }
 
