@@ -10,9 +10,9 @@
 //! larger than that bidegree in each parameter.
 
 use num_integer::Integer;
-use num_traits::{ToPrimitive, Zero};
+use num_traits::{One, ToPrimitive, Zero};
 
-use crate::coeff::{is_prime, Int, Rat};
+use crate::coeff::{is_prime, to_zint, Int, Rat, ZInt};
 use crate::implicit::{coordinate_names, parse_parametrization, Implicit, ImplicitError};
 use crate::modular::{mod_inverse, rational_reconstruction};
 use crate::monomial::{Monomial, MonomialOrder};
@@ -93,47 +93,88 @@ fn eval_mod(p: &Poly<Rat>, vals: &[u64], m: u64) -> Option<u64> {
     Some(acc)
 }
 
-/// The nullspace of a K×N matrix mod p when it is one-dimensional: the vector
-/// with its last nonzero entry 1. `Ok(None)` for a trivial nullspace,
-/// `Err(dim)` for a larger one.
-fn nullspace_1(mut a: Vec<Vec<u64>>, n: usize, p: u64) -> Result<Option<Vec<u64>>, usize> {
-    let mut pivots = Vec::new(); // pivot column of each row
-    let mut row = 0;
-    for col in 0..n {
-        let Some(r) = (row..a.len()).find(|&r| a[r][col] != 0) else {
-            continue;
-        };
-        a.swap(row, r);
-        let inv = powmod(a[row][col], p - 2, p);
-        for x in a[row][col..].iter_mut() {
-            *x = mulmod(*x, inv, p);
-        }
-        let pivot_row = a[row].clone();
-        for (r2, other) in a.iter_mut().enumerate() {
-            if r2 != row && other[col] != 0 {
-                let f = other[col];
-                for (x, y) in other[col..].iter_mut().zip(&pivot_row[col..]) {
-                    *x = (*x + p - mulmod(f, *y, p)) % p;
-                }
-            }
-        }
-        pivots.push(col);
-        row += 1;
-        if row == a.len() {
-            break;
+/// Barrett reduction modulo a prime below 2^31.
+#[derive(Clone, Copy)]
+struct Barrett {
+    p: u64,
+    m: u128,
+}
+
+impl Barrett {
+    fn new(p: u64) -> Self {
+        Barrett {
+            p,
+            m: (1u128 << 64) / p as u128,
         }
     }
-    let free: Vec<usize> = (0..n).filter(|c| !pivots.contains(c)).collect();
+    /// a mod p for a < 2^64.
+    #[inline(always)]
+    fn reduce(&self, a: u64) -> u64 {
+        let q = ((a as u128 * self.m) >> 64) as u64;
+        let mut r = a - q * self.p;
+        while r >= self.p {
+            r -= self.p;
+        }
+        r
+    }
+}
+
+/// The nullspace of a K×N matrix mod p (p < 2^31, row-major, entries < p)
+/// when it is one-dimensional: the vector with its last nonzero entry 1.
+/// `Ok(None)` for a trivial nullspace, `Err(dim)` for a larger one.
+fn nullspace_1(mut a: Vec<u64>, k: usize, n: usize, p: u64) -> Result<Option<Vec<u64>>, usize> {
+    use rayon::prelude::*;
+    let br = Barrett::new(p);
+    let mut pivots: Vec<usize> = Vec::new();
+    let mut row = 0;
+    for col in 0..n {
+        if row == k {
+            break;
+        }
+        let Some(r) = (row..k).find(|&r| a[r * n + col] != 0) else {
+            continue;
+        };
+        if r != row {
+            for c in col..n {
+                a.swap(row * n + c, r * n + c);
+            }
+        }
+        let inv = powmod(a[row * n + col], p - 2, p);
+        for x in a[row * n + col..(row + 1) * n].iter_mut() {
+            *x = br.reduce(*x * inv);
+        }
+        // Forward elimination of the rows below, in parallel.
+        let (top, rest) = a.split_at_mut((row + 1) * n);
+        let prow = &top[row * n + col..(row + 1) * n];
+        rest.par_chunks_mut(n).for_each(|other| {
+            let f = other[col];
+            if f != 0 {
+                for (x, y) in other[col..].iter_mut().zip(prow) {
+                    // x − f·y mod p, kept in 0..p: p² < 2^62 keeps the sum positive.
+                    *x = br.reduce(*x + p * p - f * y);
+                }
+            }
+        });
+        pivots.push(col);
+        row += 1;
+    }
+    let free: Vec<usize> = (0..n).filter(|c| pivots.binary_search(c).is_err()).collect();
     match free.len() {
         0 => Ok(None),
         1 => {
+            // Back substitution with the free variable set to 1.
             let f = free[0];
             let mut v = vec![0u64; n];
             v[f] = 1;
-            for (r, &c) in pivots.iter().enumerate() {
-                v[c] = (p - a[r][f]) % p;
+            for (r, &c) in pivots.iter().enumerate().rev() {
+                let mut acc = 0u64;
+                for j in c + 1..n {
+                    if v[j] != 0 {
+                        acc = br.reduce(acc + a[r * n + j] * v[j]);
+                    }
+                }
+                v[c] = (p - acc) % p;
             }
-            // Normalise: last nonzero entry 1.
             if let Some(last) = v.iter().rposition(|&x| x != 0) {
                 let inv = powmod(v[last], p - 2, p);
                 for x in v.iter_mut() {
@@ -142,8 +183,18 @@ fn nullspace_1(mut a: Vec<Vec<u64>>, n: usize, p: u64) -> Result<Option<Vec<u64>
             }
             Ok(Some(v))
         }
-        k => Err(k),
+        d => Err(d),
     }
+}
+
+/// For a polynomial surface patch of bidegree (m, n) the implicit degree is at most 2mn.
+fn degree_bound(funcs: &[RatFunc], np: usize) -> Option<u32> {
+    if np != 2 || funcs.iter().any(|f| !f.den.is_constant()) {
+        return None;
+    }
+    let m = funcs.iter().map(|f| f.num.degree_in(0)).max()?.max(0) as u32;
+    let n = funcs.iter().map(|f| f.num.degree_in(1)).max()?.max(0) as u32;
+    (m > 0 && n > 0).then_some(2 * m * n)
 }
 
 /// Implicitizes by interpolation: see the module documentation.
@@ -164,11 +215,18 @@ pub fn implicitize_interpolation(
         seed ^= seed << 17;
         seed % m
     };
-    for d in 1..=opts.max_degree {
+    // A known bound is tried first; if its nullspace is not one-dimensional the
+    // true degree is lower, and degrees are tried in increasing order.
+    let bound = degree_bound(&funcs, np).filter(|&b| b <= opts.max_degree);
+    let order: Vec<u32> = bound
+        .into_iter()
+        .chain((1..=opts.max_degree).filter(|d| Some(*d) != bound))
+        .collect();
+    for d in order {
         let mons = monomials(nc, d);
         let n = mons.len();
-        // Primes just below 2^61, largest first.
-        let mut p = (1u64 << 61) - 1;
+        // Primes just below 2^31, largest first (products of two residues fit in 64 bits).
+        let mut p = (1u64 << 31) - 1;
         let mut acc: Option<(Vec<Int>, Int, usize)> = None; // residues, modulus, pivot (last nonzero)
         let mut attempts = 0;
         loop {
@@ -193,9 +251,11 @@ pub fn implicitize_interpolation(
                 )));
             }
             // Sample points mod p.
-            let mut rows = Vec::with_capacity(n + 8);
+            let k_rows = n + 8;
+            let mut rows: Vec<u64> = Vec::with_capacity(k_rows * n);
+            let mut got = 0;
             let mut tries = 0;
-            while rows.len() < n + 8 && tries < 10 * (n + 8) {
+            while got < k_rows && tries < 10 * k_rows {
                 tries += 1;
                 let vals: Vec<u64> = (0..np).map(|_| rnd(p)).collect();
                 let mut pt = Vec::with_capacity(nc);
@@ -212,18 +272,27 @@ pub fn implicitize_interpolation(
                 if !ok {
                     continue;
                 }
-                rows.push(
-                    mons.iter()
-                        .map(|e| {
-                            e.iter()
-                                .zip(&pt)
-                                .fold(1u64, |acc, (&k, &x)| mulmod(acc, powmod(x, k as u64, p), p))
-                        })
-                        .collect::<Vec<u64>>(),
-                );
+                // Powers of each coordinate, then one product per monomial.
+                let powers: Vec<Vec<u64>> = pt
+                    .iter()
+                    .map(|&x| {
+                        let mut v = vec![1u64; d as usize + 1];
+                        for e in 1..=d as usize {
+                            v[e] = (v[e - 1] * x) % p;
+                        }
+                        v
+                    })
+                    .collect();
+                rows.extend(mons.iter().map(|e| {
+                    e.iter()
+                        .zip(&powers)
+                        .fold(1u64, |acc, (&k, pw)| (acc * pw[k as usize]) % p)
+                }));
+                got += 1;
             }
-            let v = match nullspace_1(rows, n, p) {
-                Ok(None) => break,  // no equation of degree d (mod p): try d + 1
+            let v = match nullspace_1(rows, got, n, p) {
+                Ok(None) => break, // no equation of degree d (mod p): try another degree
+                Err(_) if Some(d) == bound && acc.is_none() => break, // degree below the bound
                 Err(_) => continue, // unlucky prime or sampling: try another prime
                 Ok(Some(v)) => v,
             };
@@ -287,8 +356,11 @@ pub fn implicitize_interpolation(
 
 /// Exact check over Q that F vanishes on the parametrization: G = F(φ)·Πq_i^d is
 /// a polynomial of degree ≤ D_j in parameter j; it is zero iff it vanishes on a
-/// grid of D_j + 1 integer values per parameter.
+/// grid of D_j + 1 integer values per parameter. Coordinates are scaled to
+/// integer numerators and denominators so that the grid is evaluated in exact
+/// integer arithmetic, in parallel.
 fn verify(f: &Poly<Int>, funcs: &[RatFunc], d: u32, np: usize) -> bool {
+    use rayon::prelude::*;
     let deg = |p: &Poly<Rat>, j: usize| p.degree_in(j).max(0) as u64;
     let bounds: Vec<u64> = (0..np)
         .map(|j| {
@@ -303,56 +375,78 @@ fn verify(f: &Poly<Int>, funcs: &[RatFunc], d: u32, np: usize) -> bool {
         })
         .collect();
     let total: u64 = bounds.iter().map(|b| b + 1).product();
-    if total > 200_000 {
+    if total > 1_000_000 {
         return false;
     }
-    let eval_q = |p: &Poly<Rat>, vals: &[Int]| -> Rat {
-        let mut acc = Rat::zero();
-        for (m, c) in p.terms() {
+    // Integer numerator and denominator of each coordinate (scaled by the lcm of all denominators).
+    let int_pair: Vec<(Vec<(Vec<u16>, ZInt)>, Vec<(Vec<u16>, ZInt)>)> = funcs
+        .iter()
+        .map(|g| {
+            let mut l = Int::one();
+            for (_, c) in g.num.terms().iter().chain(g.den.terms()) {
+                l = l.lcm(c.denom());
+            }
+            let conv = |p: &Poly<Rat>| -> Vec<(Vec<u16>, ZInt)> {
+                p.terms()
+                    .iter()
+                    .map(|(m, c)| {
+                        (
+                            m.exps().to_vec(),
+                            to_zint(&(c * Rat::from_integer(l.clone())).to_integer()),
+                        )
+                    })
+                    .collect()
+            };
+            (conv(&g.num), conv(&g.den))
+        })
+        .collect();
+    let fz: Vec<(Vec<u16>, ZInt)> = f.terms().iter().map(|(m, c)| (m.exps().to_vec(), to_zint(c))).collect();
+    let eval = |p: &[(Vec<u16>, ZInt)], vals: &[ZInt]| -> ZInt {
+        let mut acc = ZInt::ZERO;
+        for (e, c) in p {
             let mut t = c.clone();
-            for (i, &e) in m.exps().iter().enumerate() {
-                if e > 0 {
-                    t *= Rat::from_integer(num_traits::pow(vals[i].clone(), e as usize));
+            for (k, &x) in e.iter().enumerate() {
+                if x > 0 {
+                    t *= vals[k].pow(x as usize);
                 }
             }
             acc += t;
         }
         acc
     };
-    let mut idx = vec![0u64; np];
-    loop {
-        let vals: Vec<Int> = idx
+    let d = d as usize;
+    let offset = ZInt::from((bounds[0] / 2) as i64);
+    (0..total).into_par_iter().all(|mut flat| {
+        let mut vals = Vec::with_capacity(np);
+        for b in &bounds {
+            vals.push(ZInt::from((flat % (b + 1)) as i64) - &offset);
+            flat /= b + 1;
+        }
+        // Powers n_i^k and q_i^k for k ≤ d.
+        let tables: Vec<(Vec<ZInt>, Vec<ZInt>)> = int_pair
             .iter()
-            .map(|&i| Int::from(i as i64) - Int::from((bounds[0] / 2) as i64))
+            .map(|(num, den)| {
+                let (n, q) = (eval(num, &vals), eval(den, &vals));
+                let mut pn = vec![ZInt::ONE; d + 1];
+                let mut pq = vec![ZInt::ONE; d + 1];
+                for k in 1..=d {
+                    pn[k] = &pn[k - 1] * &n;
+                    pq[k] = &pq[k - 1] * &q;
+                }
+                (pn, pq)
+            })
             .collect();
-        let nums: Vec<Rat> = funcs.iter().map(|g| eval_q(&g.num, &vals)).collect();
-        let dens: Vec<Rat> = funcs.iter().map(|g| eval_q(&g.den, &vals)).collect();
-        let mut g = Rat::zero();
-        for (m, c) in f.terms() {
-            let mut t = Rat::from_integer(c.clone());
-            for (i, &e) in m.exps().iter().enumerate() {
-                t *= num_traits::pow(nums[i].clone(), e as usize)
-                    * num_traits::pow(dens[i].clone(), (d as usize).saturating_sub(e as usize));
+        let mut g = ZInt::ZERO;
+        for (e, c) in &fz {
+            let mut t = c.clone();
+            for (i, &a) in e.iter().enumerate() {
+                let a = a as usize;
+                t = t * &tables[i].0[a] * &tables[i].1[d - a];
             }
             g += t;
         }
-        if !g.is_zero() {
-            return false;
-        }
-        // Next grid point.
-        let mut k = 0;
-        loop {
-            if k == np {
-                return true;
-            }
-            idx[k] += 1;
-            if idx[k] <= bounds[k] {
-                break;
-            }
-            idx[k] = 0;
-            k += 1;
-        }
-    }
+        g == ZInt::ZERO
+    })
 }
 
 #[cfg(test)]
