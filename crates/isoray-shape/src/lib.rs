@@ -18,6 +18,7 @@
 
 pub mod diag;
 pub mod eval;
+pub mod interval;
 pub mod ir;
 pub mod library;
 mod lower;

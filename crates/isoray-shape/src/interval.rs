@@ -1,0 +1,302 @@
+//! Interval arithmetic over a [`Tape`]: bounds of a shape's value over a box.
+//!
+//! Every operation returns an interval containing all values the operation
+//! takes on its argument intervals (results are widened by a few ulps to
+//! absorb rounding). Used for guaranteed distance bounds (Lipschitz bounds
+//! over a ball) and for skipping empty space.
+
+use crate::ir::{BinOp, Instr, Tape, UnOp};
+
+/// A closed interval [lo, hi]; `lo > hi` never occurs. Infinite ends are allowed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interval {
+    /// Lower end.
+    pub lo: f64,
+    /// Upper end.
+    pub hi: f64,
+}
+
+const WHOLE: Interval = Interval {
+    lo: f64::NEG_INFINITY,
+    hi: f64::INFINITY,
+};
+
+fn down(x: f64) -> f64 {
+    if x.is_finite() {
+        x - (x.abs() * 4.0 * f64::EPSILON + f64::MIN_POSITIVE)
+    } else {
+        x
+    }
+}
+
+fn up(x: f64) -> f64 {
+    if x.is_finite() {
+        x + (x.abs() * 4.0 * f64::EPSILON + f64::MIN_POSITIVE)
+    } else {
+        x
+    }
+}
+
+impl Interval {
+    /// [lo, hi] (swapped if given in the wrong order; NaN gives the whole line).
+    pub fn new(lo: f64, hi: f64) -> Interval {
+        if lo.is_nan() || hi.is_nan() {
+            return WHOLE;
+        }
+        Interval {
+            lo: lo.min(hi),
+            hi: lo.max(hi),
+        }
+    }
+    /// The point interval [x, x].
+    pub fn point(x: f64) -> Interval {
+        Interval::new(x, x)
+    }
+    /// True when x lies in the interval.
+    pub fn contains(&self, x: f64) -> bool {
+        self.lo <= x && x <= self.hi
+    }
+    /// hi − lo.
+    pub fn width(&self) -> f64 {
+        self.hi - self.lo
+    }
+    fn widen(lo: f64, hi: f64) -> Interval {
+        Interval::new(down(lo), up(hi))
+    }
+    fn hull(a: Interval, b: Interval) -> Interval {
+        Interval::new(a.lo.min(b.lo), a.hi.max(b.hi))
+    }
+    fn monotone(self, f: impl Fn(f64) -> f64) -> Interval {
+        Interval::widen(f(self.lo), f(self.hi))
+    }
+
+    /// A unary operation.
+    pub fn unary(op: UnOp, a: Interval) -> Interval {
+        match op {
+            UnOp::Neg => Interval::new(-a.hi, -a.lo),
+            UnOp::Abs => {
+                if a.lo >= 0.0 {
+                    a
+                } else if a.hi <= 0.0 {
+                    Interval::new(-a.hi, -a.lo)
+                } else {
+                    Interval::new(0.0, (-a.lo).max(a.hi))
+                }
+            }
+            UnOp::Sqrt => {
+                if a.hi < 0.0 {
+                    return Interval::point(f64::NAN).nan_to_whole();
+                }
+                Interval::widen(a.lo.max(0.0).sqrt(), a.hi.sqrt()).clamp_lo(0.0)
+            }
+            UnOp::Square => {
+                let m = Interval::unary(UnOp::Abs, a);
+                Interval::widen(m.lo * m.lo, m.hi * m.hi).clamp_lo(0.0)
+            }
+            UnOp::Sin => trig(a, 0.0),
+            UnOp::Cos => trig(a, std::f64::consts::FRAC_PI_2),
+            UnOp::Tan => {
+                // Monotone between asymptotes at π/2 + kπ.
+                let k = ((a.lo - std::f64::consts::FRAC_PI_2) / std::f64::consts::PI).floor();
+                let next = std::f64::consts::FRAC_PI_2 + (k + 1.0) * std::f64::consts::PI;
+                if a.width() >= std::f64::consts::PI || a.hi >= next || !a.lo.is_finite() {
+                    WHOLE
+                } else {
+                    a.monotone(f64::tan)
+                }
+            }
+            UnOp::Asin => Interval::new(a.lo.max(-1.0), a.hi.min(1.0)).monotone(f64::asin),
+            UnOp::Acos => {
+                let c = Interval::new(a.lo.max(-1.0), a.hi.min(1.0));
+                Interval::widen(c.hi.acos(), c.lo.acos())
+            }
+            UnOp::Atan => a.monotone(f64::atan),
+            UnOp::Exp => a.monotone(f64::exp).clamp_lo(0.0),
+            UnOp::Ln => {
+                if a.hi <= 0.0 {
+                    return WHOLE;
+                }
+                Interval::widen(if a.lo > 0.0 { a.lo.ln() } else { f64::NEG_INFINITY }, a.hi.ln())
+            }
+            UnOp::Floor => Interval::new(a.lo.floor(), a.hi.floor()),
+            UnOp::Round => Interval::new(a.lo.round(), a.hi.round()),
+            UnOp::Sign => Interval::new(crate::ir::sign(a.lo), crate::ir::sign(a.hi)),
+        }
+    }
+
+    /// A binary operation.
+    pub fn binary(op: BinOp, a: Interval, b: Interval) -> Interval {
+        match op {
+            BinOp::Add => Interval::widen(a.lo + b.lo, a.hi + b.hi),
+            BinOp::Sub => Interval::widen(a.lo - b.hi, a.hi - b.lo),
+            BinOp::Mul => {
+                let ps = [a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi];
+                if ps.iter().any(|p| p.is_nan()) {
+                    return WHOLE; // 0 × ∞
+                }
+                Interval::widen(
+                    ps.iter().copied().fold(f64::INFINITY, f64::min),
+                    ps.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                )
+            }
+            BinOp::Div => {
+                if b.lo <= 0.0 && b.hi >= 0.0 {
+                    return WHOLE;
+                }
+                Interval::binary(BinOp::Mul, a, Interval::widen(1.0 / b.hi, 1.0 / b.lo))
+            }
+            BinOp::Min => Interval::new(a.lo.min(b.lo), a.hi.min(b.hi)),
+            BinOp::Max => Interval::new(a.lo.max(b.lo), a.hi.max(b.hi)),
+            BinOp::Pow => {
+                if b.lo == b.hi && b.lo.fract() == 0.0 && b.lo.abs() < 64.0 {
+                    let n = b.lo as i32;
+                    if n == 0 {
+                        return Interval::point(1.0);
+                    }
+                    let base = if n % 2 == 0 { Interval::unary(UnOp::Abs, a) } else { a };
+                    let r = Interval::widen(base.lo.powi(n), base.hi.powi(n));
+                    if n < 0 && a.contains(0.0) {
+                        return WHOLE;
+                    }
+                    return r;
+                }
+                if a.lo > 0.0 {
+                    // a^b = exp(b ln a).
+                    let l = Interval::unary(UnOp::Ln, a);
+                    return Interval::unary(UnOp::Exp, Interval::binary(BinOp::Mul, b, l));
+                }
+                WHOLE
+            }
+            BinOp::Atan2 => Interval::new(-std::f64::consts::PI, std::f64::consts::PI),
+        }
+    }
+
+    fn clamp_lo(self, lo: f64) -> Interval {
+        Interval::new(self.lo.max(lo), self.hi.max(lo))
+    }
+
+    fn nan_to_whole(self) -> Interval {
+        if self.lo.is_nan() || self.hi.is_nan() {
+            WHOLE
+        } else {
+            self
+        }
+    }
+}
+
+/// sin(a + shift) over an interval: extrema at π/2 + kπ.
+fn trig(a: Interval, shift: f64) -> Interval {
+    use std::f64::consts::{FRAC_PI_2, PI, TAU};
+    if !a.lo.is_finite() || !a.hi.is_finite() || a.width() >= TAU {
+        return Interval::new(-1.0, 1.0);
+    }
+    let (lo, hi) = (a.lo + shift, a.hi + shift);
+    let (mut mn, mut mx) = (lo.sin().min(hi.sin()), lo.sin().max(hi.sin()));
+    // Critical points π/2 + kπ inside [lo, hi].
+    let mut k = ((lo - FRAC_PI_2) / PI).ceil();
+    while FRAC_PI_2 + k * PI <= hi {
+        let v = (FRAC_PI_2 + k * PI).sin();
+        mn = mn.min(v);
+        mx = mx.max(v);
+        k += 1.0;
+    }
+    Interval::new(down(mn).max(-1.0), up(mx).min(1.0))
+}
+
+/// Bounds of a tape over the box x × y × z.
+pub fn eval_interval(tape: &Tape, x: Interval, y: Interval, z: Interval) -> Interval {
+    let mut s = vec![WHOLE; tape.slots()];
+    s[0] = x;
+    s[1] = y;
+    s[2] = z;
+    for &(k, v) in tape.constants() {
+        s[k as usize] = Interval::point(v);
+    }
+    for ins in tape.instrs() {
+        match *ins {
+            Instr::Unary { op, out, a } => s[out as usize] = Interval::unary(op, s[a as usize]),
+            Instr::Binary { op, out, a, b } => s[out as usize] = Interval::binary(op, s[a as usize], s[b as usize]),
+            Instr::Select { out, c, a, b } => {
+                let ci = s[c as usize];
+                s[out as usize] = if ci.lo > 0.0 {
+                    s[a as usize]
+                } else if ci.hi <= 0.0 {
+                    s[b as usize]
+                } else {
+                    Interval::hull(s[a as usize], s[b as usize])
+                };
+            }
+        }
+    }
+    s[tape.output()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{compile, Library};
+
+    #[test]
+    fn tight_on_simple_functions() {
+        let sq = Interval::unary(UnOp::Square, Interval::new(-1.0, 2.0));
+        assert!(sq.lo == 0.0 && (sq.hi - 4.0).abs() < 1e-12);
+        let s = Interval::unary(UnOp::Sin, Interval::new(0.0, 3.0));
+        assert!((s.hi - 1.0).abs() < 1e-12 && s.lo.abs() < 1e-12);
+        let c = Interval::unary(UnOp::Cos, Interval::new(-0.5, 0.5));
+        assert!((c.hi - 1.0).abs() < 1e-12 && (c.lo - 0.5f64.cos()).abs() < 1e-12);
+        assert_eq!(
+            Interval::binary(BinOp::Div, Interval::point(1.0), Interval::new(-1.0, 1.0)),
+            WHOLE
+        );
+        // The sphere's distance over a box away from it.
+        let sh = compile(&Library::new(), "sphere(p, 1.0)").unwrap();
+        let r = eval_interval(
+            sh.tape(),
+            Interval::new(2.0, 3.0),
+            Interval::new(0.0, 0.0),
+            Interval::new(0.0, 0.0),
+        );
+        assert!(r.lo >= 1.0 - 1e-9 && r.hi <= 2.0 + 1e-9, "{r:?}");
+    }
+
+    #[test]
+    fn contains_every_sampled_value() {
+        let lib = Library::new();
+        let srcs = [
+            "smooth_union(torus(rotate_x(p, 0.7), 1.0, 0.3), box(p - vec3(0.5), vec3(0.4)), 0.2)",
+            "octahedron(twist_y(p, 2.0), 1.0) + displace(p, 0.1, 7.0)",
+            "cone(p, 0.5, 1.0) / (1.0 + abs(p.x)) + pow(abs(p.y) + 0.1, 1.5) - exp(-p.z)",
+            "sphere(repeat_limited(p, 0.7, 2.0), 0.2) + tan(p.x * 0.3) + atan(p.y, p.z)",
+        ];
+        let mut seed = 99u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for src in srcs {
+            let sh = compile(&lib, src).unwrap();
+            for _ in 0..300 {
+                let c = [rnd() * 6.0 - 3.0, rnd() * 6.0 - 3.0, rnd() * 6.0 - 3.0];
+                let h = rnd() * 0.8;
+                let bx = Interval::new(c[0] - h, c[0] + h);
+                let by = Interval::new(c[1] - h, c[1] + h);
+                let bz = Interval::new(c[2] - h, c[2] + h);
+                let r = eval_interval(sh.tape(), bx, by, bz);
+                for _ in 0..20 {
+                    let p = [
+                        c[0] + (rnd() * 2.0 - 1.0) * h,
+                        c[1] + (rnd() * 2.0 - 1.0) * h,
+                        c[2] + (rnd() * 2.0 - 1.0) * h,
+                    ];
+                    let v = sh.eval(p);
+                    assert!(
+                        v.is_nan() || r.contains(v),
+                        "{src}: {v} not in {r:?} over box at {c:?} ± {h}"
+                    );
+                }
+            }
+        }
+    }
+}
