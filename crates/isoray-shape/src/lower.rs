@@ -253,6 +253,7 @@ impl<'a> Lowerer<'a> {
                         BinaryOp::Sub => "subtract",
                         BinaryOp::Mul => "multiply",
                         BinaryOp::Div => "divide",
+                        BinaryOp::Pow => "raise",
                     };
                     return Err(self
                         .err(e.span, format!("cannot {verb} `{}` and `{}`", va.ty, vb.ty))
@@ -264,6 +265,7 @@ impl<'a> Lowerer<'a> {
                     BinaryOp::Sub => Builder::sub,
                     BinaryOp::Mul => Builder::mul,
                     BinaryOp::Div => Builder::div,
+                    BinaryOp::Pow => |b: &mut Builder, x: Node, y: Node| b.binary(crate::ir::BinOp::Pow, x, y),
                 };
                 Ok(self.map2(va, vb, f))
             }

@@ -9,7 +9,8 @@
 //! expr     := additive
 //! additive := term (('+' | '-') term)*
 //! term     := unary (('*' | '/') unary)*
-//! unary    := ('-' | '+') unary | postfix
+//! unary    := ('-' | '+') unary | power
+//! power    := postfix [ '^' unary ]               // right-associative; -x^2 = -(x^2)
 //! postfix  := primary ('.' SWIZZLE)*
 //! primary  := NUMBER | IDENT | IDENT '(' [expr (',' expr)*] ')' | '(' expr ')'
 //! ```
@@ -116,7 +117,7 @@ pub fn lex(text: &str, source: SourceId) -> Result<Vec<Token>, Diagnostic> {
             });
             continue;
         }
-        if b"+-*/(),.;=:".contains(&c) {
+        if b"+-*/^(),.;=:".contains(&c) {
             out.push(Token {
                 tok: Tok::Punct(c as char),
                 span: Span::new(i, i + 1),
@@ -150,6 +151,8 @@ pub enum BinaryOp {
     Mul,
     /// `/`
     Div,
+    /// `^` (power, right-associative, binds tighter than unary minus: -x^2 = -(x^2))
+    Pow,
 }
 
 impl BinaryOp {
@@ -160,6 +163,7 @@ impl BinaryOp {
             BinaryOp::Sub => '-',
             BinaryOp::Mul => '*',
             BinaryOp::Div => '/',
+            BinaryOp::Pow => '^',
         }
     }
 }
@@ -467,7 +471,27 @@ impl Parser<'_> {
                 span,
             });
         }
-        self.postfix()
+        self.power()
+    }
+
+    /// `postfix ('^' unary)?`, right-associative through `unary`.
+    fn power(&mut self) -> Result<Expr, Diagnostic> {
+        let base = self.postfix()?;
+        if !self.is_punct('^') {
+            return Ok(base);
+        }
+        self.bump();
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(self.err("expression nested too deeply", format!("more than {MAX_DEPTH} levels")));
+        }
+        let exp = self.unary()?;
+        self.depth -= 1;
+        let span = base.span.to(exp.span);
+        Ok(Expr {
+            kind: ExprKind::Binary(BinaryOp::Pow, Box::new(base), Box::new(exp)),
+            span,
+        })
     }
 
     fn postfix(&mut self) -> Result<Expr, Diagnostic> {
@@ -575,6 +599,20 @@ mod tests {
         .unwrap();
         assert_eq!(p.lets.len(), 2);
         assert_eq!(p.lets[1].ty.map(|t| t.0), Some(TypeName::Vec2));
+    }
+
+    #[test]
+    fn power_binds_tighter_than_minus_and_is_right_associative() {
+        let p = parse("-x^2", 0).unwrap();
+        assert!(matches!(p.body.kind, ExprKind::Neg(ref e) if matches!(e.kind, ExprKind::Binary(BinaryOp::Pow, _, _))));
+        let p = parse("2^3^2", 0).unwrap();
+        match p.body.kind {
+            ExprKind::Binary(BinaryOp::Pow, l, r) => {
+                assert_eq!(l.kind, ExprKind::Num(2.0));
+                assert!(matches!(r.kind, ExprKind::Binary(BinaryOp::Pow, _, _)));
+            }
+            k => panic!("{k:?}"),
+        }
     }
 
     #[test]

@@ -329,3 +329,22 @@ fn gradients_of_a_sphere_are_radial() {
         }
     }
 }
+
+#[test]
+fn power_operator() {
+    let lib = Library::new();
+    check("p.x^2 + p.y^2 + p.z^2 - 1.0", |p| {
+        p[0] * p[0] + p[1] * p[1] + p[2] * p[2] - 1.0
+    });
+    // Tangle cube: x^4 - 5x^2 + y^4 - 5y^2 + z^4 - 5z^2 + 10 (negative inside its blobs).
+    check(
+        "p.x^4 - 5.0*p.x^2 + p.y^4 - 5.0*p.y^2 + p.z^4 - 5.0*p.z^2 + 10.0",
+        |p| p.iter().map(|v| v.powi(4) - 5.0 * v * v).sum::<f64>() + 10.0,
+    );
+    let e = |s: &str| compile(&lib, s).unwrap().eval([-2.0, 3.0, 0.5]);
+    assert_eq!(e("p.x^3"), -8.0);
+    assert_eq!(e("-p.y^2"), -9.0);
+    assert_eq!(e("2.0^3.0^2.0"), 512.0);
+    assert_eq!(e("length(p^2)"), (16.0f64 + 81.0 + 0.0625).sqrt());
+    assert!(compile(&lib, "p.x^").is_err());
+}
