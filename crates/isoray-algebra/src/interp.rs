@@ -354,6 +354,9 @@ pub fn implicitize_interpolation(
     )))
 }
 
+/// A polynomial as (exponents, integer coefficient) pairs.
+type IntTerms = Vec<(Vec<u16>, ZInt)>;
+
 /// Exact check over Q that F vanishes on the parametrization: G = F(φ)·Πq_i^d is
 /// a polynomial of degree ≤ D_j in parameter j; it is zero iff it vanishes on a
 /// grid of D_j + 1 integer values per parameter. Coordinates are scaled to
@@ -379,14 +382,14 @@ fn verify(f: &Poly<Int>, funcs: &[RatFunc], d: u32, np: usize) -> bool {
         return false;
     }
     // Integer numerator and denominator of each coordinate (scaled by the lcm of all denominators).
-    let int_pair: Vec<(Vec<(Vec<u16>, ZInt)>, Vec<(Vec<u16>, ZInt)>)> = funcs
+    let int_pair: Vec<(IntTerms, IntTerms)> = funcs
         .iter()
         .map(|g| {
             let mut l = Int::one();
             for (_, c) in g.num.terms().iter().chain(g.den.terms()) {
                 l = l.lcm(c.denom());
             }
-            let conv = |p: &Poly<Rat>| -> Vec<(Vec<u16>, ZInt)> {
+            let conv = |p: &Poly<Rat>| -> IntTerms {
                 p.terms()
                     .iter()
                     .map(|(m, c)| {
