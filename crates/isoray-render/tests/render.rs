@@ -243,3 +243,35 @@ fn step_view_shows_more_steps_near_silhouettes() {
     let first = img.color[0];
     assert!(img.color.iter().any(|c| *c != first));
 }
+
+#[test]
+fn implicit_sphere_depth_matches_ray_sphere_intersection() {
+    let text = SPHERE.replace(
+        "[[object]]\nshape = \"sphere(p - vec3(0.3, -0.2, 0.1), 1.0)\"",
+        "[surface.sphere_eq]\nparams = { r = 1.0 }\nimplicit = \"x^2 + y^2 + z^2 - r\"\n[[object]]\nshape = \"sphere_eq(p - vec3(0.3, -0.2, 0.1))\"",
+    );
+    assert_ne!(text, SPHERE);
+    let s = scene(&text, &[]);
+    let (img, _) = render(&s, &aovs());
+    let depth = img.depth.unwrap();
+    let cam = RayCamera::new(&s.camera, 64, 48);
+    let mut hits = 0;
+    for j in 0..48u32 {
+        for i in 0..64u32 {
+            let d = cam.direction(i as f64 + 0.5, j as f64 + 0.5);
+            let (t, closest) = ray_sphere(cam.origin(), d, DVec3::new(0.3, -0.2, 0.1), 1.0);
+            if (closest - 1.0).abs() < 0.02 {
+                continue;
+            }
+            let k = (j * 64 + i) as usize;
+            match t {
+                Some(t) => {
+                    hits += 1;
+                    assert!((depth[k] as f64 - t).abs() < 2e-3, "({i},{j}): {} vs {t}", depth[k]);
+                }
+                None => assert_eq!(depth[k], f32::INFINITY),
+            }
+        }
+    }
+    assert!(hits > 300);
+}

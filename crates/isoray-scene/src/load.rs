@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use isoray_shape::diag::suggest;
-use isoray_shape::{Builder, Diagnostic, Library, Shape, Span, Value};
+use isoray_shape::{Builder, Diagnostic, Library, Shape, Span, SurfaceMode, Value};
 use toml::de::{DeTable, DeValue};
 
 use crate::doc::{convert, from_toml, Entry, Item, Located, Origin};
@@ -698,29 +698,41 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     ));
                 }
             }
-            for other in ["implicit", "parametric"] {
-                if let Some(ov) = r.get(other) {
-                    return Err(src.error(
-                        ov.origin,
-                        format!("`{ctx}.{other}`: only `sdf` surfaces are supported by this version of isoray"),
-                        Some("not supported yet"),
-                        &[],
-                    ));
-                }
-            }
-            let Some((text, loc)) = r.string("sdf")? else {
+            if let Some(ov) = r.get("parametric") {
                 return Err(src.error(
-                    e.value.origin,
-                    format!("`{ctx}` needs an `sdf` expression"),
-                    Some("add sdf = \"...\""),
-                    &[],
+                    ov.origin,
+                    format!("`{ctx}.parametric`: parametric surfaces are not supported by this version of isoray yet"),
+                    Some("not supported yet"),
+                    &["write the surface as `sdf` or as an `implicit` equation".into()],
                 ));
+            }
+            let sdf = r.string("sdf")?;
+            let implicit = r.string("implicit")?;
+            let (text, loc, mode) = match (sdf, implicit) {
+                (Some((t, l)), None) => (t, l, SurfaceMode::Sdf),
+                (None, Some((t, l))) => (t, l, SurfaceMode::Implicit),
+                (Some(_), Some((_, l))) => {
+                    return Err(src.error(
+                        l.origin,
+                        format!("`{ctx}` has both `sdf` and `implicit`: a surface has exactly one mode"),
+                        Some("remove one of them"),
+                        &[],
+                    ))
+                }
+                (None, None) => {
+                    return Err(src.error(
+                        e.value.origin,
+                        format!("`{ctx}` needs an `sdf` expression or an `implicit` equation"),
+                        Some("add sdf = \"...\" or implicit = \"...\""),
+                        &[],
+                    ))
+                }
             };
-            r.finish(&["params", "sdf"])?;
+            r.finish(&["params", "sdf", "implicit", "parametric"])?;
             let Item::Str(_, map) = &loc.item else { unreachable!() };
             let id = snippets.len();
             snippets.push((loc, map));
-            lib.add_surface(&e.key, sparams, text, id)
+            lib.add_surface_with_mode(&e.key, sparams, text, id, mode)
                 .map_err(|d| shape_error(&snippets, d))?;
         }
     }

@@ -176,3 +176,28 @@ fn garbage_never_panics() {
         assert!(load_str(s, "g.toml", &[]).is_err(), "{s:?} should be rejected");
     }
 }
+
+#[test]
+fn implicit_surfaces() {
+    let text = "[surface.sphere_eq]\nparams = { r = 1.0 }\nimplicit = \"x^2 + y^2 + z^2 - r\"\n[[object]]\nshape = \"sphere_eq(p - vec3(1.0, 0.0, 0.0), 4.0)\"\n";
+    let s = load_str(text, "imp.toml", &[]).unwrap();
+    // f / |grad f| for the sphere of radius 2 centred at (1, 0, 0): at distance 1 outside,
+    // f = 9 - 4 = 5 and |grad f| = 6.
+    assert!((s.distance([4.0, 0.0, 0.0]) - 5.0 / 6.0).abs() < 1e-12);
+    assert!(s.distance([3.0, 0.0, 0.0]).abs() < 1e-12);
+    assert!(s.distance([1.0, 0.0, 0.0]) < 0.0);
+    // Near the surface the estimate is the distance to first order.
+    assert!((s.distance([3.001, 0.0, 0.0]) - 0.001).abs() < 1e-6);
+    // The centre, where the gradient vanishes, is guarded (no NaN).
+    assert!(s.distance([1.0, 0.0, 0.0]).is_finite());
+    let e = err("[surface.flat]\nparams = { r = 1.0 }\nimplicit = \"r - 1.0\"\n[[object]]\nshape = \"flat(p)\"\n");
+    assert!(
+        e.message.contains("gradient") && e.message.contains("identically zero"),
+        "{e}"
+    );
+    assert_eq!(e.line, Some(3));
+    let e = err("[surface.s]\nsdf = \"length(p) - 1.0\"\nimplicit = \"x - 1.0\"\n[[object]]\nshape = \"s(p)\"\n");
+    assert!(e.message.contains("exactly one mode"), "{e}");
+    let e = err("[surface.s]\nimplicit = \"x^2 + w^2 - 1.0\"\n[[object]]\nshape = \"s(p)\"\n");
+    assert!(e.message.contains("unknown name `w`"), "{e}");
+}

@@ -28,7 +28,7 @@ pub mod types;
 pub use diag::{Diagnostic, SourceId, Span};
 pub use eval::{gradient, BatchEvaluator, Dual, GradientMode, PointEvaluator, LANES};
 pub use ir::{Builder, Node, Tape};
-pub use lower::{Library, Surface};
+pub use lower::{Library, Surface, SurfaceMode, GRADIENT_GUARD};
 pub use types::{Type, Value};
 
 /// A compiled shape: the tape of one signed distance function.

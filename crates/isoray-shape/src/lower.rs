@@ -24,7 +24,24 @@ pub struct Surface {
     pub program: Program,
     /// Where the body's text came from.
     pub source: SourceId,
+    /// How the body defines the surface.
+    pub mode: SurfaceMode,
 }
+
+/// How a user surface's body defines it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SurfaceMode {
+    /// The body is a signed distance (uses `p`).
+    #[default]
+    Sdf,
+    /// The body is an equation f(x, y, z) = 0 (uses `x`, `y`, `z` or `p`); it
+    /// is traced through the first-order distance estimate f / |∇f| with the
+    /// exact gradient, guarded where the gradient vanishes.
+    Implicit,
+}
+
+/// Where |∇f| is below this, the implicit distance estimate divides by it instead.
+pub const GRADIENT_GUARD: f64 = 1e-9;
 
 /// Everything shape text may refer to besides `p`: the scene's named
 /// parameters and its user primitives.
@@ -64,6 +81,18 @@ impl Library {
         text: &str,
         source: SourceId,
     ) -> Result<(), Diagnostic> {
+        self.add_surface_with_mode(name, params, text, source, SurfaceMode::Sdf)
+    }
+
+    /// Parses and adds a user surface defined in the given mode.
+    pub fn add_surface_with_mode(
+        &mut self,
+        name: &str,
+        params: Vec<(String, Value)>,
+        text: &str,
+        source: SourceId,
+        mode: SurfaceMode,
+    ) -> Result<(), Diagnostic> {
         let program = parse(text, source)?;
         if !self.surfaces.contains_key(name) {
             self.order.push(name.to_string());
@@ -75,6 +104,7 @@ impl Library {
                 params,
                 program,
                 source,
+                mode,
             },
         );
         Ok(())
@@ -449,6 +479,11 @@ impl<'a> Lowerer<'a> {
         self.source = s.source;
         self.calls.push(s.name.clone());
         self.scope.push(("p".to_string(), p));
+        if s.mode == SurfaceMode::Implicit {
+            for (i, n) in ["x", "y", "z"].iter().enumerate() {
+                self.scope.push((n.to_string(), Val::float(p.c[i])));
+            }
+        }
         for ((n, _), v) in s.params.iter().zip(params) {
             self.scope.push((n.clone(), *v));
         }
@@ -465,7 +500,33 @@ impl<'a> Lowerer<'a> {
             )
             .with_label(format!("this is a {}", v.ty)));
         }
+        if s.mode == SurfaceMode::Implicit {
+            return self.distance_estimate(s, v.s());
+        }
         Ok(v)
+    }
+
+    /// f / max(|∇f|, guard) with the exact (symbolic) gradient.
+    fn distance_estimate(&mut self, s: &Surface, f: Node) -> Result<Val, Diagnostic> {
+        let g: Vec<Node> = (0..3).map(|v| self.b.derivative(f, v)).collect();
+        if g.iter().all(|&n| self.b.const_value(n) == Some(0.0)) {
+            return Err(Diagnostic::new(
+                s.source,
+                s.program.body.span,
+                format!("the gradient of surface `{}`'s equation is identically zero", s.name),
+            )
+            .with_label("this equation does not depend on x, y or z")
+            .with_note("an implicit surface needs an equation f(x, y, z) = 0 that varies with the point"));
+        }
+        let mut n2 = self.b.square(g[0]);
+        for &c in &g[1..] {
+            let sq = self.b.square(c);
+            n2 = self.b.add(n2, sq);
+        }
+        let norm = self.b.sqrt(n2);
+        let guard = self.b.constant(GRADIENT_GUARD);
+        let den = self.b.max(norm, guard);
+        Ok(Val::float(self.b.div(f, den)))
     }
 
     /// Length of a value (|x| for a float).
