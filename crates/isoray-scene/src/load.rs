@@ -732,8 +732,23 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
             let Item::Str(_, map) = &loc.item else { unreachable!() };
             let id = snippets.len();
             snippets.push((loc, map));
+            let param_keys = r_params_origins(&e.value).unwrap_or_default();
             lib.add_surface_with_mode(&e.key, sparams, text, id, mode)
                 .map_err(|d| shape_error(&snippets, d))?;
+            if mode == SurfaceMode::Implicit {
+                let used = lib.surface(&e.key).map(|s| s.program.names_used()).unwrap_or_default();
+                if let Some((name, origin)) = param_keys.iter().find(|(n, _)| !used.contains(n)) {
+                    return Err(src.error(
+                        *origin,
+                        format!(
+                            "parameter `{name}` of surface `{}` is never used in its equation",
+                            e.key
+                        ),
+                        Some("unused parameter"),
+                        &["remove it, or use it in the equation".into()],
+                    ));
+                }
+            }
         }
     }
     lib.check().map_err(|d| shape_error(&snippets, d))?;
@@ -875,6 +890,18 @@ fn smooth_union(b: &mut Builder, x: isoray_shape::Node, y: isoray_shape::Node, k
     let corr = b.mul_c(h2, 0.25 / k);
     let m = b.min(x, y);
     b.sub(m, corr)
+}
+
+/// The names and key origins of a surface table's `params`.
+fn r_params_origins(surface: &Located) -> Option<Vec<(String, Origin)>> {
+    let Item::Table(entries) = &surface.item else {
+        return None;
+    };
+    let params = entries.iter().rev().find(|e| e.key == "params")?;
+    let Item::Table(pe) = &params.value.item else {
+        return None;
+    };
+    Some(pe.iter().map(|p| (p.key.clone(), p.key_origin)).collect())
 }
 
 fn check_name(src: &Sources, name: &str, origin: Origin) -> Result<()> {

@@ -198,6 +198,9 @@ fn implicit_surfaces() {
     assert_eq!(e.line, Some(3));
     let e = err("[surface.s]\nsdf = \"length(p) - 1.0\"\nimplicit = \"x - 1.0\"\n[[object]]\nshape = \"s(p)\"\n");
     assert!(e.message.contains("exactly one mode"), "{e}");
+    let e = err("[surface.s]\nparams = { r = 1.0, q = 2.0 }\nimplicit = \"x^2 + y^2 + z^2 - r\"\n[[object]]\nshape = \"s(p)\"\n");
+    assert!(e.message.contains("parameter `q` of surface `s` is never used"), "{e}");
+    assert_eq!((e.line, e.column), (Some(2), Some(21)), "{e}");
     let e = err("[surface.s]\nimplicit = \"x^2 + w^2 - 1.0\"\n[[object]]\nshape = \"s(p)\"\n");
     assert!(e.message.contains("unknown name `w`"), "{e}");
 }

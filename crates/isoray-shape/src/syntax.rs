@@ -245,6 +245,32 @@ pub struct Program {
     pub body: Expr,
 }
 
+impl Program {
+    /// Every variable name the program reads (bindings included).
+    pub fn names_used(&self) -> std::collections::BTreeSet<String> {
+        fn walk(e: &Expr, out: &mut std::collections::BTreeSet<String>) {
+            match &e.kind {
+                ExprKind::Num(_) => {}
+                ExprKind::Var(n) => {
+                    out.insert(n.clone());
+                }
+                ExprKind::Call { args, .. } => args.iter().for_each(|a| walk(a, out)),
+                ExprKind::Binary(_, a, b) => {
+                    walk(a, out);
+                    walk(b, out);
+                }
+                ExprKind::Neg(a) | ExprKind::Swizzle(a, _) => walk(a, out),
+            }
+        }
+        let mut out = std::collections::BTreeSet::new();
+        for l in &self.lets {
+            walk(&l.value, &mut out);
+        }
+        walk(&self.body, &mut out);
+        out
+    }
+}
+
 /// Words that cannot be used as binding names.
 pub const KEYWORDS: &[&str] = &["let", "return", "float", "vec2", "vec3"];
 
