@@ -113,16 +113,8 @@ reference_file() {
     cat >"$TMP/ref-$c.sing" <<SING
 LIB "$ROOT/$SING_DIR/systems.lib";
 ring r = 0, ($vars), dp;
-short = 0;
-string f = "$f";
 ideal I = $kind($n);
-ideal G = monicReducedSB(I);
-int i;
-write(":w " + f, "# vars: $vars order: grevlex");
-write(":a " + f, "# input:");
-for (i = 1; i <= ncols(I); i++) { write(":a " + f, "#   " + string(I[i])); }
-write(":a " + f, "# basis:");
-for (i = 1; i <= ncols(G); i++) { write(":a " + f, string(G[i])); }
+ideal G = writeReference("$f", "$vars", I);
 quit;
 SING
     if ! timeout "$TIMEOUT" Singular -q -t --no-rc "$TMP/ref-$c.sing" </dev/null >"$TMP/ref-$c.log" 2>&1 \

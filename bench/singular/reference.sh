@@ -58,16 +58,8 @@ gb_case() {
   cat >"$tmp/$name.sing" <<SING
 LIB "$here/systems.lib";
 ring r = 0, ($vars), dp;
-short = 0;
-string f = "$file";
 ideal I = $kind($n);
-ideal G = monicReducedSB(I);
-int i;
-write(":w " + f, "# vars: $vars order: grevlex");
-write(":a " + f, "# input:");
-for (i = 1; i <= ncols(I); i++) { write(":a " + f, "#   " + string(I[i])); }
-write(":a " + f, "# basis:");
-for (i = 1; i <= ncols(G); i++) { write(":a " + f, string(G[i])); }
+ideal G = writeReference("$file", "$vars", I);
 "$name: " + string(ncols(I)) + " input, " + string(ncols(G)) + " basis elements";
 quit;
 SING
