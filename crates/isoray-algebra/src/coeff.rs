@@ -66,6 +66,25 @@ pub trait Field: Coeff {
     }
 }
 
+/// The ring operations of [`Coeff`] for types whose references implement the
+/// arithmetic operators (the big integers and rationals).
+macro_rules! operator_arithmetic {
+    () => {
+        fn add(&self, o: &Self) -> Self {
+            self + o
+        }
+        fn sub(&self, o: &Self) -> Self {
+            self - o
+        }
+        fn mul(&self, o: &Self) -> Self {
+            self * o
+        }
+        fn neg(&self) -> Self {
+            -self
+        }
+    };
+}
+
 impl Coeff for Int {
     fn zero_like(&self) -> Self {
         Int::zero()
@@ -82,18 +101,7 @@ impl Coeff for Int {
     fn is_one(&self) -> bool {
         One::is_one(self)
     }
-    fn add(&self, o: &Self) -> Self {
-        self + o
-    }
-    fn sub(&self, o: &Self) -> Self {
-        self - o
-    }
-    fn mul(&self, o: &Self) -> Self {
-        self * o
-    }
-    fn neg(&self) -> Self {
-        -self
-    }
+    operator_arithmetic!();
     fn is_negative(&self) -> bool {
         Signed::is_negative(self)
     }
@@ -148,18 +156,7 @@ impl Coeff for Rat {
     fn is_one(&self) -> bool {
         One::is_one(self)
     }
-    fn add(&self, o: &Self) -> Self {
-        self + o
-    }
-    fn sub(&self, o: &Self) -> Self {
-        self - o
-    }
-    fn mul(&self, o: &Self) -> Self {
-        self * o
-    }
-    fn neg(&self) -> Self {
-        -self
-    }
+    operator_arithmetic!();
     fn is_negative(&self) -> bool {
         Signed::is_negative(self)
     }
@@ -404,18 +401,7 @@ impl Coeff for ZInt {
     fn is_one(&self) -> bool {
         ZInt::is_one(self)
     }
-    fn add(&self, o: &Self) -> Self {
-        self + o
-    }
-    fn sub(&self, o: &Self) -> Self {
-        self - o
-    }
-    fn mul(&self, o: &Self) -> Self {
-        self * o
-    }
-    fn neg(&self) -> Self {
-        -self
-    }
+    operator_arithmetic!();
     fn is_negative(&self) -> bool {
         self < &ZInt::ZERO
     }
