@@ -489,13 +489,9 @@ impl<'a, D: Domain> State<'a, D> {
     }
 
     /// Fully reduces f modulo the current basis (all elements except `skip`).
+    /// (Top reduction only, with tails left for the final interreduction, was
+    /// measured 2–16× slower on katsura and cyclic.)
     fn reduce_full(&mut self, f: &Poly<D>, skip: Option<usize>) -> Result<Poly<D>, GroebnerError> {
-        self.reduce(f, skip, false)
-    }
-
-    /// Reduces f modulo the current basis (all elements except `skip`): only
-    /// until the leading term is irreducible when `top_only`, else fully.
-    fn reduce(&mut self, f: &Poly<D>, skip: Option<usize>, top_only: bool) -> Result<Poly<D>, GroebnerError> {
         let ring = self.ring;
         // p is kept in increasing order, so that its leading term is at the end.
         let mut p: Vec<(Monomial, D)> = f.terms().iter().rev().cloned().collect();
@@ -508,10 +504,6 @@ impl<'a, D: Domain> State<'a, D> {
                 e.mask & !lmask == 0 && e.poly.lm().is_some_and(|g| g.divides(lm))
             });
             let Some(k) = divisor else {
-                if top_only {
-                    rem.extend(p.drain(..).rev());
-                    break;
-                }
                 rem.push(p.pop().expect("nonempty"));
                 continue;
             };
@@ -574,7 +566,6 @@ impl<'a, D: Domain> State<'a, D> {
 
     /// Gebauer–Möller installation of a new basis element.
     fn update(&mut self, h: Poly<D>, sugar: u32) {
-        let ring = self.ring;
         let hm = h.lm().expect("nonzero").clone();
         let new = self.polys.len();
         self.polys.push(Element {
@@ -633,7 +624,6 @@ impl<'a, D: Domain> State<'a, D> {
         self.basis
             .retain(|&g| !hm.divides(polys[g].poly.lm().expect("nonzero")));
         self.basis.push(new);
-        let _ = ring;
     }
 
     /// The reduced basis from the current (minimal) one.

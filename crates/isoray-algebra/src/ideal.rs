@@ -59,8 +59,7 @@ fn with_front_var(ring: &Ring, base: &str) -> (Ring, Vec<usize>) {
 
 /// Drops the first `k` variables of polynomials that do not use them and
 /// returns them in `ring`'s order.
-fn project(big: &Ring, k: usize, ring: &Ring, basis: &[Poly<Rat>]) -> Vec<Poly<Rat>> {
-    let _ = big;
+fn project(k: usize, ring: &Ring, basis: &[Poly<Rat>]) -> Vec<Poly<Rat>> {
     let mut out: Vec<Poly<Rat>> = basis
         .iter()
         .filter(|p| (0..k).all(|i| !p.uses_var(i)))
@@ -131,7 +130,7 @@ pub fn intersection(
         all.push(g.embed(&big, &map).mul(&big, &one_minus_t));
     }
     let basis = groebner(&big, &all, opts)?.basis;
-    Ok(project(&big, 1, ring, &basis))
+    Ok(project(1, ring, &basis))
 }
 
 /// I : f = {g : g·f ∈ I}, computed as (I ∩ ⟨f⟩) / f.
@@ -175,19 +174,18 @@ pub fn quotient(
 }
 
 /// A reduced basis of I + ⟨1 − y·f⟩ in a ring with the new variable y in front
-/// (block order eliminating y), with that ring.
+/// (block order eliminating y).
 fn rabinowitsch(
     ring: &Ring,
     i: &[Poly<Rat>],
     f: &Poly<Rat>,
     opts: &GroebnerOptions,
-) -> Result<(Ring, Vec<Poly<Rat>>), GroebnerError> {
+) -> Result<Vec<Poly<Rat>>, GroebnerError> {
     let (big, map) = with_front_var(ring, "y");
     let y = Poly::monomial(Monomial::var(big.nvars(), 0, 1), one());
     let mut all: Vec<Poly<Rat>> = i.iter().map(|p| p.embed(&big, &map)).collect();
     all.push(Poly::constant(&big, one()).sub(&big, &y.mul(&big, &f.embed(&big, &map))));
-    let basis = groebner(&big, &all, opts)?.basis;
-    Ok((big, basis))
+    Ok(groebner(&big, &all, opts)?.basis)
 }
 
 /// I : f^∞, by eliminating y from I + ⟨1 − y·f⟩.
@@ -197,8 +195,8 @@ pub fn saturation(
     f: &Poly<Rat>,
     opts: &GroebnerOptions,
 ) -> Result<Vec<Poly<Rat>>, GroebnerError> {
-    let (big, basis) = rabinowitsch(ring, i, f, opts)?;
-    Ok(project(&big, 1, ring, &basis))
+    let basis = rabinowitsch(ring, i, f, opts)?;
+    Ok(project(1, ring, &basis))
 }
 
 /// True when f lies in the radical of I (Rabinowitsch: 1 ∈ I + ⟨1 − y·f⟩).
@@ -208,7 +206,7 @@ pub fn radical_contains(
     f: &Poly<Rat>,
     opts: &GroebnerOptions,
 ) -> Result<bool, GroebnerError> {
-    let (_, basis) = rabinowitsch(ring, i, f, opts)?;
+    let basis = rabinowitsch(ring, i, f, opts)?;
     Ok(basis.len() == 1 && basis[0].is_constant() && !basis[0].is_zero())
 }
 

@@ -396,11 +396,6 @@ fn split_name(r: &Ring, name: &str) -> Option<Vec<usize>> {
     Some(out)
 }
 
-/// Integer content helper for callers: true when every coefficient is an integer.
-pub fn is_integral(p: &Poly<Rat>) -> bool {
-    p.terms().iter().all(|(_, c)| c.is_integer())
-}
-
 /// The polynomial with integer coefficients obtained by clearing denominators
 /// (multiplying by their lcm), made primitive with a positive leading coefficient.
 pub fn to_primitive_integer(ring: &Ring, p: &Poly<Rat>) -> Poly<Int> {

@@ -174,7 +174,6 @@ struct Reader<'a> {
     src: &'a Sources,
     entries: &'a [Entry],
     ctx: String,
-    origin: Origin,
     used: Vec<bool>,
 }
 
@@ -185,7 +184,6 @@ impl<'a> Reader<'a> {
                 src,
                 entries,
                 ctx: ctx.to_string(),
-                origin: v.origin,
                 used: vec![false; entries.len()],
             }),
             other => Err(src.error(
@@ -348,7 +346,6 @@ impl<'a> Reader<'a> {
                 ));
             }
         }
-        let _ = self.origin;
         Ok(())
     }
 }
