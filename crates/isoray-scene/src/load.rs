@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use isoray_shape::diag::suggest;
+use isoray_shape::surface::{BoundMethod, SurfaceOptions, DEFAULT_DOMAIN};
 use isoray_shape::{Builder, Diagnostic, Library, Shape, Span, SurfaceMode, Value};
 use toml::de::{DeTable, DeValue};
 
@@ -236,6 +237,11 @@ impl<'a> Reader<'a> {
             Item::Num(x, _) if x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => Ok(x as u32),
             _ => Err(self.err(v, key, &format!("an integer from {lo} to {hi}"))),
         }
+    }
+
+    /// A boolean that is read but not marked as used when absent.
+    fn peek_bool(&mut self, key: &str) -> Result<bool> {
+        self.boolean(key, false)
     }
 
     fn boolean(&mut self, key: &str, default: bool) -> Result<bool> {
@@ -638,6 +644,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
     // [params]
     let mut lib = Library::new();
     let mut params = Vec::new();
+    let mut surface_materials: Vec<(String, usize)> = Vec::new();
     if let Some(v) = top.get("params") {
         let Item::Table(entries) = &v.item else {
             return Err(src.error(
@@ -695,43 +702,71 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     ));
                 }
             }
-            if let Some(ov) = r.get("parametric") {
-                return Err(src.error(
-                    ov.origin,
-                    format!("`{ctx}.parametric`: parametric surfaces are not supported by this version of isoray yet"),
-                    Some("not supported yet"),
-                    &["write the surface as `sdf` or as an `implicit` equation".into()],
-                ));
+            let options = surface_options(&mut r, &ctx)?;
+            if let Some((m, loc)) = r.string("material")? {
+                let k = material_index(src, &materials, m, loc, &format!("{ctx}.material"))?;
+                surface_materials.push((e.key.clone(), k));
             }
             let sdf = r.string("sdf")?;
             let implicit = r.string("implicit")?;
+            let parametric = r.get("parametric");
+            let given: Vec<&Located> = [sdf.map(|x| x.1), implicit.map(|x| x.1), parametric]
+                .into_iter()
+                .flatten()
+                .collect();
+            if given.len() > 1 {
+                return Err(src.error(
+                    given[1].origin,
+                    format!("`{ctx}` has more than one of `sdf`, `implicit` and `parametric`: a surface has exactly one mode"),
+                    Some("remove all but one"),
+                    &[],
+                ));
+            }
+            if let Some(pv) = parametric {
+                let coords = parametric_coords(src, pv, &ctx)?;
+                let domain = parametric_domain(&mut r, &ctx)?;
+                r.finish(SURFACE_KEYS)?;
+                let mut texts = Vec::new();
+                for (text, loc) in coords {
+                    let Item::Str(_, map) = &loc.item else { unreachable!() };
+                    texts.push((text, snippets.len()));
+                    snippets.push((loc, map));
+                }
+                let texts: [(&str, usize); 3] = [texts[0], texts[1], texts[2]];
+                lib.add_parametric_surface(&e.key, sparams, texts, domain, options)
+                    .map_err(|d| shape_error(&snippets, d))?;
+                continue;
+            }
+            for key in ["domain", "image_only"] {
+                if let Some(v) = r.get(key) {
+                    return Err(src.error(
+                        v.origin,
+                        format!("`{ctx}.{key}` applies only to parametric surfaces"),
+                        Some("only for `parametric`"),
+                        &[],
+                    ));
+                }
+            }
             let (text, loc, mode) = match (sdf, implicit) {
                 (Some((t, l)), None) => (t, l, SurfaceMode::Sdf),
                 (None, Some((t, l))) => (t, l, SurfaceMode::Implicit),
-                (Some(_), Some((_, l))) => {
-                    return Err(src.error(
-                        l.origin,
-                        format!("`{ctx}` has both `sdf` and `implicit`: a surface has exactly one mode"),
-                        Some("remove one of them"),
-                        &[],
-                    ))
-                }
-                (None, None) => {
+                _ => {
                     return Err(src.error(
                         e.value.origin,
-                        format!("`{ctx}` needs an `sdf` expression or an `implicit` equation"),
-                        Some("add sdf = \"...\" or implicit = \"...\""),
+                        format!("`{ctx}` needs an `sdf` expression, an `implicit` equation or a `parametric` x, y, z"),
+                        Some("add sdf = \"...\", implicit = \"...\" or parametric = { x = \"...\", y = \"...\", z = \"...\" }"),
                         &[],
                     ))
                 }
             };
-            r.finish(&["params", "sdf", "implicit", "parametric"])?;
+            r.finish(SURFACE_KEYS)?;
             let Item::Str(_, map) = &loc.item else { unreachable!() };
             let id = snippets.len();
             snippets.push((loc, map));
             let param_keys = r_params_origins(&e.value).unwrap_or_default();
             lib.add_surface_with_mode(&e.key, sparams, text, id, mode)
                 .map_err(|d| shape_error(&snippets, d))?;
+            lib.set_surface_options(&e.key, options);
             if mode == SurfaceMode::Implicit {
                 let used = lib.surface(&e.key).map(|s| s.program.names_used()).unwrap_or_default();
                 if let Some((name, origin)) = param_keys.iter().find(|(n, _)| !used.contains(n)) {
@@ -775,23 +810,14 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 let mut r = Reader::new(src, ov, &format!("object.{i}"))?;
                 let name = r.string("name")?.map(|(s, _)| s.to_string());
                 let material = match r.string("material")? {
-                    None => 0,
-                    Some((m, loc)) => match materials.iter().position(|x| x.name == m) {
-                        Some(k) => k,
-                        None => {
-                            let names: Vec<&str> = materials.iter().map(|x| x.name.as_str()).collect();
-                            let mut notes = vec![format!("defined materials: {}", names.join(", "))];
-                            if let Some(s) = suggest(m, names.iter().copied()) {
-                                notes.insert(0, format!("did you mean \"{s}\"?"));
-                            }
-                            return Err(src.error(
-                                loc.origin,
-                                format!("`object.{i}.material`: no material named \"{m}\""),
-                                Some("unknown material"),
-                                &notes,
-                            ));
-                        }
-                    },
+                    None => None,
+                    Some((m, loc)) => Some(material_index(
+                        src,
+                        &materials,
+                        m,
+                        loc,
+                        &format!("object.{i}.material"),
+                    )?),
                 };
                 let Some((text, loc)) = r.string("shape")? else {
                     return Err(src.error(
@@ -809,6 +835,17 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     .compile(&mut builder, text, id)
                     .map_err(|d| shape_error(&snippets, d))?;
                 nodes.push(node);
+                // Without a material of its own, an object takes the default
+                // material of the first surface its shape calls.
+                let material = material.unwrap_or_else(|| {
+                    let called = isoray_shape::syntax::parse(text, id)
+                        .map(|p| p.functions_called())
+                        .unwrap_or_default();
+                    called
+                        .iter()
+                        .find_map(|c| surface_materials.iter().find(|(n, _)| n == c).map(|(_, k)| *k))
+                        .unwrap_or(0)
+                });
                 objects.push(Object {
                     name,
                     material,
@@ -842,7 +879,110 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         objects,
         params,
         shape,
+        library: lib,
     })
+}
+
+/// All keys of a `[surface.NAME]` table.
+pub const SURFACE_KEYS: &[&str] = &[
+    "params",
+    "sdf",
+    "implicit",
+    "parametric",
+    "domain",
+    "image_only",
+    "bound",
+    "lipschitz_factor",
+    "material",
+];
+
+/// The index of a named material, or an error at `loc` naming the defined ones.
+fn material_index(src: &Sources, materials: &[Material], m: &str, loc: &Located, ctx: &str) -> Result<usize> {
+    if let Some(k) = materials.iter().position(|x| x.name == m) {
+        return Ok(k);
+    }
+    let names: Vec<&str> = materials.iter().map(|x| x.name.as_str()).collect();
+    let mut notes = vec![format!("defined materials: {}", names.join(", "))];
+    if let Some(s) = suggest(m, names.iter().copied()) {
+        notes.insert(0, format!("did you mean \"{s}\"?"));
+    }
+    Err(src.error(
+        loc.origin,
+        format!("`{ctx}`: no material named \"{m}\""),
+        Some("unknown material"),
+        &notes,
+    ))
+}
+
+/// `bound`, `lipschitz_factor` and `image_only` of a surface.
+fn surface_options(r: &mut Reader, ctx: &str) -> Result<SurfaceOptions> {
+    let bound = r.choice(
+        "bound",
+        &[
+            ("auto", BoundMethod::Auto),
+            ("taylor", BoundMethod::Taylor),
+            ("first-order", BoundMethod::FirstOrder),
+        ],
+        BoundMethod::Auto,
+    )?;
+    let lipschitz_factor = r.num_in(
+        "lipschitz_factor",
+        1.0,
+        |x| x.is_finite() && x >= 1.0,
+        "a number ≥ 1 (the traced distance is divided by it)",
+    )?;
+    let _ = ctx;
+    Ok(SurfaceOptions {
+        bound,
+        lipschitz_factor,
+        image_only: r.peek_bool("image_only")?,
+    })
+}
+
+/// The x, y, z strings of `parametric = { x = "...", y = "...", z = "..." }`.
+fn parametric_coords<'a>(src: &'a Sources, v: &'a Located, ctx: &str) -> Result<Vec<(&'a str, &'a Located)>> {
+    let mut r = Reader::new(src, v, &format!("{ctx}.parametric"))?;
+    let mut out = Vec::new();
+    for key in ["x", "y", "z"] {
+        match r.string(key)? {
+            Some(c) => out.push(c),
+            None => {
+                return Err(src.error(
+                    v.origin,
+                    format!("`{ctx}.parametric` needs `{key}`: the coordinates x, y and z as expressions in s and t"),
+                    Some(&format!("missing `{key}`")),
+                    &["for example parametric = { x = \"s\", y = \"t\", z = \"s^2 + t^2\" }".into()],
+                ))
+            }
+        }
+    }
+    r.finish(&["x", "y", "z"])?;
+    Ok(out)
+}
+
+/// `domain = { s = [min, max], t = [min, max] }` (each optional).
+fn parametric_domain(r: &mut Reader, ctx: &str) -> Result<[[f64; 2]; 2]> {
+    let mut domain = DEFAULT_DOMAIN;
+    let Some(v) = r.get("domain") else {
+        return Ok(domain);
+    };
+    let mut d = Reader::new(r.src, v, &format!("{ctx}.domain"))?;
+    for (i, key) in ["s", "t"].iter().enumerate() {
+        let Some(item) = d.get(key) else { continue };
+        let range = match &item.item {
+            Item::Array(xs) if xs.len() == 2 => match (&xs[0].item, &xs[1].item) {
+                (Item::Num(a, _), Item::Num(b, _)) if a.is_finite() && b.is_finite() && a < b => Some([*a, *b]),
+                _ => None,
+            },
+            _ => None,
+        };
+        match range {
+            Some(rg) => domain[i] = rg,
+            None => return Err(d.err(item, key, "[min, max] with min < max, like [-1.0, 1.0]")),
+        }
+    }
+    d.finish(&["s", "t"])?;
+    Ok(domain)
 }
 
 /// All keys of `[render]`.

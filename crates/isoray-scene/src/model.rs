@@ -1,7 +1,7 @@
 //! The scene model: camera, render settings, lights, materials, objects.
 //! Every field has a documented default (see `docs/SCENE.md`).
 
-use isoray_shape::{Shape, Value};
+use isoray_shape::{Library, Shape, Value};
 
 /// A colour or vector of three components.
 pub type Vec3 = [f64; 3];
@@ -259,6 +259,8 @@ pub struct Scene {
     pub params: Vec<(String, Value)>,
     /// The whole scene's distance: the union (or smooth union) of the objects.
     pub shape: Shape,
+    /// The scene's parameters and user surfaces, with their cached analyses.
+    pub library: Library,
 }
 
 impl Scene {

@@ -179,7 +179,7 @@ fn garbage_never_panics() {
 
 #[test]
 fn implicit_surfaces() {
-    let text = "[surface.sphere_eq]\nparams = { r = 1.0 }\nimplicit = \"x^2 + y^2 + z^2 - r\"\n[[object]]\nshape = \"sphere_eq(p - vec3(1.0, 0.0, 0.0), 4.0)\"\n";
+    let text = "[surface.sphere_eq]\nparams = { r = 1.0 }\nimplicit = \"x^2 + y^2 + z^2 - r\"\nbound = \"first-order\"\n[[object]]\nshape = \"sphere_eq(p - vec3(1.0, 0.0, 0.0), 4.0)\"\n";
     let s = load_str(text, "imp.toml", &[]).unwrap();
     // f / |grad f| for the sphere of radius 2 centred at (1, 0, 0): at distance 1 outside,
     // f = 9 - 4 = 5 and |grad f| = 6.
@@ -190,6 +190,13 @@ fn implicit_surfaces() {
     assert!((s.distance([3.001, 0.0, 0.0]) - 0.001).abs() < 1e-6);
     // The centre, where the gradient vanishes, is guarded (no NaN).
     assert!(s.distance([1.0, 0.0, 0.0]).is_finite());
+    // The default bound for a polynomial is the Taylor-root bound: at (4, 0, 0),
+    // the smallest root of 6δ + √3·δ² = 5, below the true distance 1.
+    let s = load_str(&text.replace("bound = \"first-order\"\n", ""), "imp.toml", &[]).unwrap();
+    let want = (-6.0 + (36.0f64 + 20.0 * 3f64.sqrt()).sqrt()) / (2.0 * 3f64.sqrt());
+    assert!((s.distance([4.0, 0.0, 0.0]) - want).abs() < 1e-9, "{}", s.distance([4.0, 0.0, 0.0]));
+    assert!((s.distance([3.001, 0.0, 0.0]) - 0.001).abs() < 1e-6);
+    assert!(s.distance([1.0, 0.0, 0.0]) < 0.0 && s.distance([1.0, 0.0, 0.0]) >= -2.0);
     let e = err("[surface.flat]\nparams = { r = 1.0 }\nimplicit = \"r - 1.0\"\n[[object]]\nshape = \"flat(p)\"\n");
     assert!(
         e.message.contains("gradient") && e.message.contains("identically zero"),

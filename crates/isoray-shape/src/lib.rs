@@ -16,12 +16,14 @@
 //! Conventions: right-handed coordinates, y up. Rotations turn the shape
 //! counter-clockwise when looking down the axis towards the origin.
 
+pub mod algebraic;
 pub mod diag;
 pub mod eval;
 pub mod interval;
 pub mod ir;
 pub mod library;
 mod lower;
+pub mod surface;
 pub mod syntax;
 pub mod types;
 

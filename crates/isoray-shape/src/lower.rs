@@ -6,9 +6,13 @@
 
 use std::collections::HashMap;
 
+use std::sync::{Arc, Mutex};
+
+use crate::algebraic::{taylor_bound, xyz_ring};
 use crate::diag::{suggest, Diagnostic, SourceId, Span};
 use crate::ir::{Builder, Node, UnOp};
 use crate::library;
+use crate::surface::{analyze, image_only_field, Analysis, BoundMethod, ParametricDef, SurfaceOptions};
 use crate::syntax::{parse, BinaryOp, Expr, ExprKind, Program, TypeName};
 use crate::types::{Type, Val, Value};
 
@@ -26,6 +30,11 @@ pub struct Surface {
     pub source: SourceId,
     /// How the body defines the surface.
     pub mode: SurfaceMode,
+    /// How the surface is traced (implicit and parametric modes).
+    pub options: SurfaceOptions,
+    /// The coordinate functions of a parametric surface (then `program` is
+    /// the x coordinate).
+    pub parametric: Option<Box<ParametricDef>>,
 }
 
 /// How a user surface's body defines it.
@@ -38,10 +47,16 @@ pub enum SurfaceMode {
     /// is traced through the first-order distance estimate f / |∇f| with the
     /// exact gradient, guarded where the gradient vanishes.
     Implicit,
+    /// The surface is the image of (x(s,t), y(s,t), z(s,t)); rational
+    /// parametrizations are implicitized and traced like implicit ones.
+    Parametric,
 }
 
 /// Where |∇f| is below this, the implicit distance estimate divides by it instead.
 pub const GRADIENT_GUARD: f64 = 1e-9;
+
+/// Analyses keyed by surface name and the bits of its parameter values.
+type AnalysisCache = Arc<Mutex<HashMap<(String, Vec<u64>), Arc<Analysis>>>>;
 
 /// Everything shape text may refer to besides `p`: the scene's named
 /// parameters and its user primitives.
@@ -50,6 +65,9 @@ pub struct Library {
     params: Vec<(String, Value)>,
     surfaces: HashMap<String, Surface>,
     order: Vec<String>,
+    /// Analyses of implicit and parametric surfaces, per surface and
+    /// parameter values: each equation is derived (and implicitized) once.
+    analyses: AnalysisCache,
 }
 
 impl Library {
@@ -105,9 +123,117 @@ impl Library {
                 program,
                 source,
                 mode,
+                options: SurfaceOptions::default(),
+                parametric: None,
             },
         );
         Ok(())
+    }
+
+    /// Adds a parametric surface: `coords` are the x, y, z expressions in
+    /// the parameters `s` and `t` (and the surface's params), each with the
+    /// source id of its text.
+    pub fn add_parametric_surface(
+        &mut self,
+        name: &str,
+        params: Vec<(String, Value)>,
+        coords: [(&str, SourceId); 3],
+        domain: [[f64; 2]; 2],
+        options: SurfaceOptions,
+    ) -> Result<(), Diagnostic> {
+        let mut programs = Vec::new();
+        for (text, id) in coords {
+            programs.push(parse(text, id)?);
+        }
+        let sources = [coords[0].1, coords[1].1, coords[2].1];
+        let programs: [Program; 3] = programs.try_into().expect("three coordinates");
+        self.add_surface_with_mode(name, params, coords[0].0, coords[0].1, SurfaceMode::Parametric)?;
+        let s = self.surfaces.get_mut(name).expect("just added");
+        s.options = options;
+        s.parametric = Some(Box::new(ParametricDef {
+            coords: programs,
+            sources,
+            domain,
+        }));
+        Ok(())
+    }
+
+    /// Sets how a surface is traced.
+    pub fn set_surface_options(&mut self, name: &str, options: SurfaceOptions) {
+        if let Some(s) = self.surfaces.get_mut(name) {
+            s.options = options;
+        }
+    }
+
+    /// What isoray derives for a surface (its equation, the bound it traces,
+    /// timings) with the given constant parameters; computed once and cached.
+    pub fn analysis(&self, s: &Surface, params: &[Value]) -> Result<Arc<Analysis>, Diagnostic> {
+        let key = (
+            s.name.clone(),
+            params
+                .iter()
+                .flat_map(|v| match v {
+                    Value::Float(x) => vec![x.to_bits()],
+                    Value::Vec2(a) => a.iter().map(|x| x.to_bits()).collect(),
+                    Value::Vec3(a) => a.iter().map(|x| x.to_bits()).collect(),
+                })
+                .collect::<Vec<u64>>(),
+        );
+        if let Some(a) = self.analyses.lock().ok().and_then(|m| m.get(&key).cloned()) {
+            return Ok(a);
+        }
+        let a = Arc::new(analyze(self, s, params)?);
+        if let Ok(mut m) = self.analyses.lock() {
+            m.insert(key, a.clone());
+        }
+        Ok(a)
+    }
+
+    /// The analysis of a surface with its default parameters.
+    pub fn default_analysis(&self, name: &str) -> Option<Result<Arc<Analysis>, Diagnostic>> {
+        let s = self.surfaces.get(name)?;
+        let defaults: Vec<Value> = s.params.iter().map(|(_, v)| *v).collect();
+        Some(self.analysis(s, &defaults))
+    }
+
+    /// Lowers a surface's raw body (the equation f for implicit surfaces,
+    /// the distance for SDFs) at the point X, Y, Z of `b` with constant parameters.
+    pub(crate) fn lower_raw(&self, b: &mut Builder, s: &Surface, params: &[Value]) -> Result<Node, Diagnostic> {
+        let mut l = Lowerer::new(b, self, s.source);
+        let p = l.point();
+        let args: Vec<Val> = params.iter().map(|v| v.lower(l.b)).collect();
+        Ok(l.lower_body(s, p, &args)?.s())
+    }
+
+    /// Lowers the coordinates of a parametric surface at s = X, t = Y of `b`.
+    pub(crate) fn lower_coords(&self, b: &mut Builder, s: &Surface, params: &[Value]) -> Result<[Node; 3], Diagnostic> {
+        let def = s.parametric.as_ref().expect("a parametric surface");
+        let mut out = [Node(0); 3];
+        for (i, prog) in def.coords.iter().enumerate() {
+            let mut l = Lowerer::new(b, self, def.sources[i]);
+            let (sv, tv) = (l.b.x(), l.b.y());
+            l.scope.push(("s".to_string(), Val::float(sv)));
+            l.scope.push(("t".to_string(), Val::float(tv)));
+            for ((n, _), v) in s.params.iter().zip(params) {
+                let lv = v.lower(l.b);
+                l.scope.push((n.clone(), lv));
+            }
+            let v = l.program(prog)?;
+            if v.ty != Type::Float {
+                let coord = ["x", "y", "z"][i];
+                return Err(Diagnostic::new(
+                    def.sources[i],
+                    prog.body.span,
+                    format!(
+                        "coordinate `{coord}` of surface `{}` must be a `float`, found `{}`",
+                        s.name, v.ty
+                    ),
+                )
+                .with_label(format!("this is a {}", v.ty)));
+            }
+            out[i] = v.s();
+        }
+        Ok(out)
     }
 
     /// A user primitive by name.
@@ -473,7 +599,19 @@ impl<'a> Lowerer<'a> {
         self.inline_surface(s, args[0].v, &vals, name_span)
     }
 
-    fn inline_surface(&mut self, s: &Surface, p: Val, params: &[Val], _span: Span) -> Result<Val, Diagnostic> {
+    fn inline_surface(&mut self, s: &Surface, p: Val, params: &[Val], span: Span) -> Result<Val, Diagnostic> {
+        if s.mode == SurfaceMode::Parametric {
+            return self.parametric_distance(s, p, params, span);
+        }
+        let v = self.lower_body(s, p, params)?;
+        if s.mode == SurfaceMode::Implicit {
+            return self.implicit_distance(s, v.s(), p, params, span);
+        }
+        Ok(v)
+    }
+
+    /// The body of an SDF or implicit surface at `p`: the distance, or f.
+    fn lower_body(&mut self, s: &Surface, p: Val, params: &[Val]) -> Result<Val, Diagnostic> {
         let saved_scope = std::mem::take(&mut self.scope);
         let saved_source = self.source;
         self.source = s.source;
@@ -493,21 +631,116 @@ impl<'a> Lowerer<'a> {
         self.scope = saved_scope;
         let v = r?;
         if v.ty != Type::Float {
+            let what = if s.mode == SurfaceMode::Implicit {
+                "an equation f(x, y, z) = 0 must be a `float`"
+            } else {
+                "must give a `float` distance"
+            };
             return Err(Diagnostic::new(
                 s.source,
                 s.program.body.span,
-                format!("surface `{}` must give a `float` distance, found `{}`", s.name, v.ty),
+                format!("surface `{}`: {what}, found `{}`", s.name, v.ty),
             )
             .with_label(format!("this is a {}", v.ty)));
-        }
-        if s.mode == SurfaceMode::Implicit {
-            return self.distance_estimate(s, v.s());
         }
         Ok(v)
     }
 
-    /// f / max(|∇f|, guard) with the exact (symbolic) gradient.
-    fn distance_estimate(&mut self, s: &Surface, f: Node) -> Result<Val, Diagnostic> {
+    /// The parameter values, when every one is a constant.
+    fn const_values(&self, params: &[Val]) -> Option<Vec<Value>> {
+        params
+            .iter()
+            .map(|v| {
+                let c: Option<Vec<f64>> = (0..v.ty.width()).map(|i| self.b.const_value(v.c[i])).collect();
+                let c = c?;
+                Some(match c.len() {
+                    1 => Value::Float(c[0]),
+                    2 => Value::Vec2([c[0], c[1]]),
+                    _ => Value::Vec3([c[0], c[1], c[2]]),
+                })
+            })
+            .collect()
+    }
+
+    /// Divides a bound by the surface's Lipschitz safety factor.
+    fn apply_factor(&mut self, s: &Surface, d: Node) -> Val {
+        let k = s.options.lipschitz_factor;
+        Val::float(if k == 1.0 { d } else { self.b.mul_c(d, 1.0 / k) })
+    }
+
+    /// The traced distance of an implicit surface: the Taylor-root bound of
+    /// its square-free part when the equation is a polynomial, else f/|∇f|.
+    fn implicit_distance(
+        &mut self,
+        s: &Surface,
+        f: Node,
+        p: Val,
+        params: &[Val],
+        span: Span,
+    ) -> Result<Val, Diagnostic> {
+        self.check_gradient(s, f)?;
+        if s.options.bound != BoundMethod::FirstOrder {
+            let why = match self.const_values(params) {
+                Some(vals) => {
+                    let a = self.lib.analysis(s, &vals)?;
+                    match &a.equation {
+                        Ok(eq) => {
+                            let d = taylor_bound(self.b, &xyz_ring(), &eq.poly, [p.c[0], p.c[1], p.c[2]]);
+                            return Ok(self.apply_factor(s, d));
+                        }
+                        Err(why) => why.clone(),
+                    }
+                }
+                None => "its parameters are not constants here".to_string(),
+            };
+            if s.options.bound == BoundMethod::Taylor {
+                return Err(self
+                    .err(span, format!("surface `{}` asks for bound = \"taylor\", but {why}", s.name))
+                    .with_label("no Taylor-root bound for this call")
+                    .with_note("the Taylor-root bound needs a polynomial equation with constant parameters; use bound = \"first-order\""));
+            }
+        }
+        let d = first_order(self.b, f);
+        Ok(self.apply_factor(s, d))
+    }
+
+    /// The traced distance of a parametric surface: the bound of its implicit equation.
+    fn parametric_distance(&mut self, s: &Surface, p: Val, params: &[Val], span: Span) -> Result<Val, Diagnostic> {
+        let Some(vals) = self.const_values(params) else {
+            return Err(self
+                .err(
+                    span,
+                    format!("the parameters of parametric surface `{}` must be constants", s.name),
+                )
+                .with_label("not a constant")
+                .with_note("each set of parameter values is implicitized once, when the scene loads"));
+        };
+        let a = self.lib.analysis(s, &vals)?;
+        let eq = match &a.equation {
+            Ok(eq) => eq,
+            Err(why) => {
+                return Err(self
+                    .err(span, format!("surface `{}` cannot be sphere-traced: {why}", s.name))
+                    .with_label("no implicit equation")
+                    .with_note("only rational parametrizations can be implicitized; others will be tessellated by the mesh pipeline"))
+            }
+        };
+        let pc = [p.c[0], p.c[1], p.c[2]];
+        let mut d = if s.options.bound == BoundMethod::FirstOrder {
+            let f = crate::algebraic::build_equation(self.b, &eq.poly, pc);
+            first_order(self.b, f)
+        } else {
+            taylor_bound(self.b, &xyz_ring(), &eq.poly, pc)
+        };
+        if let (true, Some(coords)) = (s.options.image_only, a.parametrization.as_ref()) {
+            let def = s.parametric.as_ref().expect("a parametric surface");
+            d = image_only_field(self.b, coords, def.domain, pc, d);
+        }
+        Ok(self.apply_factor(s, d))
+    }
+
+    /// Rejects an equation whose gradient is identically zero.
+    fn check_gradient(&mut self, s: &Surface, f: Node) -> Result<(), Diagnostic> {
         let g: Vec<Node> = (0..3).map(|v| self.b.derivative(f, v)).collect();
         if g.iter().all(|&n| self.b.const_value(n) == Some(0.0)) {
             return Err(Diagnostic::new(
@@ -518,15 +751,7 @@ impl<'a> Lowerer<'a> {
             .with_label("this equation does not depend on x, y or z")
             .with_note("an implicit surface needs an equation f(x, y, z) = 0 that varies with the point"));
         }
-        let mut n2 = self.b.square(g[0]);
-        for &c in &g[1..] {
-            let sq = self.b.square(c);
-            n2 = self.b.add(n2, sq);
-        }
-        let norm = self.b.sqrt(n2);
-        let guard = self.b.constant(GRADIENT_GUARD);
-        let den = self.b.max(norm, guard);
-        Ok(Val::float(self.b.div(f, den)))
+        Ok(())
     }
 
     /// Length of a value (|x| for a float).
@@ -566,6 +791,20 @@ impl<'a> Lowerer<'a> {
     pub(crate) fn un(&mut self, op: UnOp, v: Val) -> Val {
         self.map1(v, |b, x| b.unary(op, x))
     }
+}
+
+/// The first-order distance estimate f / max(|∇f|, guard) with the exact (symbolic) gradient.
+pub(crate) fn first_order(b: &mut Builder, f: Node) -> Node {
+    let g: Vec<Node> = (0..3).map(|v| b.derivative(f, v)).collect();
+    let mut n2 = b.square(g[0]);
+    for &c in &g[1..] {
+        let sq = b.square(c);
+        n2 = b.add(n2, sq);
+    }
+    let norm = b.sqrt(n2);
+    let guard = b.constant(GRADIENT_GUARD);
+    let den = b.max(norm, guard);
+    b.div(f, den)
 }
 
 fn fmt_value(v: &Value) -> String {

@@ -246,6 +246,32 @@ pub struct Program {
 }
 
 impl Program {
+    /// The names of the functions it calls, in order of first appearance.
+    pub fn functions_called(&self) -> Vec<String> {
+        fn walk(e: &Expr, out: &mut Vec<String>) {
+            match &e.kind {
+                ExprKind::Num(_) | ExprKind::Var(_) => {}
+                ExprKind::Call { name, args, .. } => {
+                    if !out.contains(name) {
+                        out.push(name.clone());
+                    }
+                    args.iter().for_each(|a| walk(a, out));
+                }
+                ExprKind::Binary(_, a, b) => {
+                    walk(a, out);
+                    walk(b, out);
+                }
+                ExprKind::Neg(a) | ExprKind::Swizzle(a, _) => walk(a, out),
+            }
+        }
+        let mut out = Vec::new();
+        for l in &self.lets {
+            walk(&l.value, &mut out);
+        }
+        walk(&self.body, &mut out);
+        out
+    }
+
     /// Every variable name the program reads (bindings included).
     pub fn names_used(&self) -> std::collections::BTreeSet<String> {
         fn walk(e: &Expr, out: &mut std::collections::BTreeSet<String>) {
