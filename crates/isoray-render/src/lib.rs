@@ -26,6 +26,7 @@
 //! assert_eq!(stats.primary_rays, 32 * 24);
 //! ```
 
+pub mod bounds;
 pub mod camera;
 pub mod output;
 pub mod shade;
@@ -70,12 +71,18 @@ pub struct RenderedImage {
 }
 
 /// Work counters.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Stats {
     /// Primary rays (pixels × aa²).
     pub primary_rays: u64,
     /// Distance-function evaluations of all kinds.
     pub evaluations: u64,
+    /// Primary-ray steps that went from outside to clearly inside a surface:
+    /// the field is not a distance bound there (see [`Stats::overshoot_factor`]).
+    pub overshoots: u64,
+    /// The largest factor a step was too long by; a `lipschitz_factor` at
+    /// least this large on the responsible surface removes the overshoots.
+    pub overshoot_factor: f32,
 }
 
 /// Number of tiles an image of the scene's size is split into.
@@ -93,6 +100,8 @@ struct TileOut {
     depth: Vec<f32>,
     normals: Vec<[f32; 3]>,
     evals: u64,
+    overshoots: u64,
+    worst_overshoot: f32,
 }
 
 /// Renders the scene.
@@ -125,8 +134,11 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> (RenderedImage, Stats) {
         normals: opts.aovs.then(|| vec![[0.0; 3]; n]),
     };
     let mut evals = 0;
+    let (mut overshoots, mut worst) = (0, 0.0f32);
     for t in outs {
         evals += t.evals;
+        overshoots += t.overshoots;
+        worst = worst.max(t.worst_overshoot);
         for j in 0..t.h {
             for i in 0..t.w {
                 let src = (j * t.w + i) as usize;
@@ -147,6 +159,8 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> (RenderedImage, Stats) {
         Stats {
             primary_rays: n as u64 * aa * aa,
             evaluations: evals,
+            overshoots,
+            overshoot_factor: worst,
         },
     )
 }
@@ -325,6 +339,8 @@ impl<'s> Worker<'s> {
             depth,
             normals,
             evals,
+            overshoots: std::mem::take(&mut self.scratch.overshoots),
+            worst_overshoot: std::mem::take(&mut self.scratch.worst_overshoot),
         }
     }
 

@@ -14,6 +14,14 @@ pub struct Scratch {
     ds: Vec<f32>,
     active: Vec<u32>,
     next: Vec<u32>,
+    /// The previous distance of each ray of the packet (overshoot detection).
+    last: Vec<f32>,
+    /// Steps that landed clearly inside a surface after a positive distance:
+    /// the field overstepped, so it is not a distance bound there.
+    pub overshoots: u64,
+    /// The largest overshoot factor seen: (d_before + |d_after|) / d_before,
+    /// about the factor the step was too long by.
+    pub worst_overshoot: f32,
 }
 
 impl Scratch {
@@ -112,6 +120,8 @@ pub fn sphere_trace(
     let mut evals = 0u64;
     scratch.active.clear();
     scratch.active.extend(0..n as u32);
+    scratch.last.clear();
+    scratch.last.resize(n, f32::NAN);
     let mut step = 0;
     while !scratch.active.is_empty() {
         evals += scratch.eval_active(eval, rays, |i| hits[i].t);
@@ -123,8 +133,16 @@ pub fn sphere_trace(
             h.steps = step;
             let threshold = if s.relative_epsilon { eps * h.t } else { eps };
             if d < threshold {
+                // A bound never steps from outside to clearly inside.
+                let before = scratch.last[i as usize];
+                if before > 0.0 && d < -threshold.max(eps) * 4.0 {
+                    scratch.overshoots += 1;
+                    let factor = (before * scale + (-d)) / before;
+                    scratch.worst_overshoot = scratch.worst_overshoot.max(factor);
+                }
                 continue; // hit at h.t
             }
+            scratch.last[i as usize] = d;
             if d.is_nan() {
                 h.t = f32::INFINITY; // undefined field: treat as a miss
                 continue;

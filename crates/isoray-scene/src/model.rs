@@ -269,3 +269,38 @@ impl Scene {
         self.shape.eval(p)
     }
 }
+
+impl Scene {
+    /// The implicit and parametric surfaces that object `i`'s shape calls,
+    /// directly or through other surfaces, in order of first call.
+    pub fn equation_surfaces(&self, i: usize) -> Vec<String> {
+        let Some(o) = self.objects.get(i) else {
+            return Vec::new();
+        };
+        let mut todo: Vec<String> = isoray_shape::syntax::parse(&o.source, 0)
+            .map(|p| p.functions_called())
+            .unwrap_or_default();
+        let mut seen: Vec<String> = Vec::new();
+        let mut out = Vec::new();
+        while let Some(name) = todo.first().cloned() {
+            todo.remove(0);
+            if seen.contains(&name) {
+                continue;
+            }
+            seen.push(name.clone());
+            let Some(s) = self.library.surface(&name) else {
+                continue;
+            };
+            if s.mode != isoray_shape::SurfaceMode::Sdf {
+                out.push(name.clone());
+            }
+            todo.extend(s.program.functions_called());
+            if let Some(def) = &s.parametric {
+                for c in &def.coords {
+                    todo.extend(c.functions_called());
+                }
+            }
+        }
+        out
+    }
+}

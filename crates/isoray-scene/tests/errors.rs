@@ -194,7 +194,11 @@ fn implicit_surfaces() {
     // the smallest root of 6δ + √3·δ² = 5, below the true distance 1.
     let s = load_str(&text.replace("bound = \"first-order\"\n", ""), "imp.toml", &[]).unwrap();
     let want = (-6.0 + (36.0f64 + 20.0 * 3f64.sqrt()).sqrt()) / (2.0 * 3f64.sqrt());
-    assert!((s.distance([4.0, 0.0, 0.0]) - want).abs() < 1e-9, "{}", s.distance([4.0, 0.0, 0.0]));
+    assert!(
+        (s.distance([4.0, 0.0, 0.0]) - want).abs() < 1e-9,
+        "{}",
+        s.distance([4.0, 0.0, 0.0])
+    );
     assert!((s.distance([3.001, 0.0, 0.0]) - 0.001).abs() < 1e-6);
     assert!(s.distance([1.0, 0.0, 0.0]) < 0.0 && s.distance([1.0, 0.0, 0.0]) >= -2.0);
     let e = err("[surface.flat]\nparams = { r = 1.0 }\nimplicit = \"r - 1.0\"\n[[object]]\nshape = \"flat(p)\"\n");

@@ -235,15 +235,17 @@ fn analyze_parametric(lib: &Library, s: &Surface, params: &[Value]) -> Result<An
     for (i, &n) in nodes.iter().enumerate() {
         match crate::algebraic::to_rational(&b, n, [Some(0), Some(1), None], &ring) {
             Ok(rf) => coords.push(rf),
-            Err(op) => return Ok(Analysis {
-                equation: Err(format!(
+            Err(op) => {
+                return Ok(Analysis {
+                    equation: Err(format!(
                     "coordinate `{}` uses {op}, so the parametrization is not rational and has no implicit equation",
                     ["x", "y", "z"][i]
                 )),
-                parametrization: None,
-                implicitization: None,
-                timings,
-            }),
+                    parametrization: None,
+                    implicitization: None,
+                    timings,
+                })
+            }
         }
     }
     let coords: [RatFunc; 3] = coords.try_into().expect("three coordinates");
@@ -353,11 +355,7 @@ pub type Residual = ([f64; 2], [f64; 3], f64);
 
 /// Checks that points of the parametrization satisfy the equation. Returns
 /// the number of points checked and the worst one: ((s, t), (x, y, z), residual).
-pub fn verify(
-    coords: &[RatFunc; 3],
-    poly: &Poly<Rat>,
-    domain: [[f64; 2]; 2],
-) -> (usize, Option<Residual>) {
+pub fn verify(coords: &[RatFunc; 3], poly: &Poly<Rat>, domain: [[f64; 2]; 2]) -> (usize, Option<Residual>) {
     let mut checked = 0;
     let mut worst: Option<Residual> = None;
     for st in domain_samples(domain, 12, 200) {

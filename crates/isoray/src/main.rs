@@ -110,7 +110,20 @@ enum Command {
         #[arg(long, value_name = "SECONDS")]
         timeout: Option<f64>,
     },
-    /// Parse and type-check a scene; print `ok` or the errors.
+    /// Print what isoray derives for a surface: its implicit equation,
+    /// degree, the distance bound it traces, and timings.
+    Surface {
+        /// The scene file.
+        scene: PathBuf,
+        /// The surface's name (`[surface.NAME]`).
+        name: String,
+        /// Override any scene key.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Parse and type-check a scene; print `ok` or the errors. Objects that
+    /// call implicit or parametric surfaces are also checked on sampled camera
+    /// rays for distance estimates that overstep the surface.
     Check {
         /// The scene file.
         scene: PathBuf,
@@ -183,7 +196,8 @@ fn main() -> ExitCode {
             stats,
             timeout,
         } => algebra_cmd::cmd_implicitize(&x, &y, z.as_deref(), params.as_deref(), &method, stats, timeout),
-        Command::Check { scene, set } => load(&scene, &set).map(|_| println!("ok")).map_err(Failure::from),
+        Command::Check { scene, set } => cmd_check(&scene, &set),
+        Command::Surface { scene, name, set } => cmd_surface(&scene, &name, &set),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -197,6 +211,72 @@ fn main() -> ExitCode {
             ExitCode::from(f.code)
         }
     }
+}
+
+fn cmd_check(scene_path: &Path, overrides: &[String]) -> Result<(), Failure> {
+    let scene = load(scene_path, overrides)?;
+    println!("ok");
+    for c in isoray_render::bounds::check_scene(&scene) {
+        let what = object_label(&scene, c.object);
+        if c.violated() {
+            eprintln!("{}", violation_warning(&what, &c));
+        } else {
+            println!(
+                "bound: {what}: holds on {} of {} sampled rays that reach the surface (largest field/distance ratio {:.3})",
+                c.crossings, c.rays, c.worst_ratio
+            );
+        }
+    }
+    Ok(())
+}
+
+fn object_label(scene: &Scene, i: usize) -> String {
+    match &scene.objects[i].name {
+        Some(n) => format!("object {i} (`{n}`)"),
+        None => format!("object {i}"),
+    }
+}
+
+fn violation_warning(what: &str, c: &isoray_render::bounds::BoundCheck) -> String {
+    let surfaces: Vec<String> = c.surfaces.iter().map(|s| format!("[surface.{s}]")).collect();
+    format!(
+        "warning: {what}: the distance estimate oversteps the surface by up to {:.2}x (at ({:.4}, {:.4}, {:.4})), so rays can step through it\n  = help: set lipschitz_factor = {:.1} in {}",
+        c.worst_ratio,
+        c.at[0],
+        c.at[1],
+        c.at[2],
+        c.suggested_factor(),
+        surfaces.join(", ")
+    )
+}
+
+fn cmd_surface(scene_path: &Path, name: &str, overrides: &[String]) -> Result<(), Failure> {
+    let scene = load(scene_path, overrides)?;
+    let lib = &scene.library;
+    let Some(s) = lib.surface(name) else {
+        let names = lib.surface_names();
+        let mut msg = format!("the scene `{}` has no surface named `{name}`", scene_path.display());
+        if let Some(sg) = isoray_shape::diag::suggest(name, names.iter().map(|s| s.as_str())) {
+            msg.push_str(&format!("\n  = help: did you mean `{sg}`?"));
+        }
+        if names.is_empty() {
+            msg.push_str("\n  = note: it defines no [surface.NAME] tables");
+        } else {
+            msg.push_str(&format!("\n  = note: its surfaces: {}", names.join(", ")));
+        }
+        return Err(usage(msg));
+    };
+    if s.mode == isoray_shape::SurfaceMode::Sdf {
+        println!("surface:   {name} (sdf)");
+        println!("bound:     the signed distance as written");
+        return Ok(());
+    }
+    let analysis = lib
+        .default_analysis(name)
+        .expect("the surface exists")
+        .map_err(|d| usage(d.message.clone()))?;
+    print!("{}", isoray_shape::surface::describe(name, s, &analysis));
+    Ok(())
 }
 
 fn usage(message: String) -> Failure {
@@ -257,6 +337,25 @@ fn cmd_render(
     }
     if !quiet {
         summary(&scene, &stats, elapsed, out);
+    }
+    if stats.overshoots > 0 {
+        let names: Vec<String> = (0..scene.objects.len())
+            .flat_map(|i| scene.equation_surfaces(i))
+            .map(|s| format!("[surface.{s}]"))
+            .collect();
+        let fix = if names.is_empty() {
+            "check the shapes' distance functions".to_string()
+        } else {
+            format!(
+                "set lipschitz_factor = {:.1} in {} (`isoray check` finds the object)",
+                (stats.overshoot_factor * 1.1 * 10.0).ceil() / 10.0,
+                names.join(", ")
+            )
+        };
+        eprintln!(
+            "warning: {} ray steps went through a surface (a step was up to {:.2}x too long): the distance estimate is not a bound there\n  = help: {fix}",
+            stats.overshoots, stats.overshoot_factor
+        );
     }
     Ok(())
 }
