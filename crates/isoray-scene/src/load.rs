@@ -921,6 +921,7 @@ fn surface_options(r: &mut Reader, ctx: &str) -> Result<SurfaceOptions> {
         &[
             ("auto", BoundMethod::Auto),
             ("taylor", BoundMethod::Taylor),
+            ("lipschitz", BoundMethod::Lipschitz),
             ("first-order", BoundMethod::FirstOrder),
         ],
         BoundMethod::Auto,

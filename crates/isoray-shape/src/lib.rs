@@ -22,6 +22,7 @@ pub mod eval;
 pub mod interval;
 pub mod ir;
 pub mod library;
+pub mod lipschitz;
 mod lower;
 pub mod surface;
 pub mod syntax;

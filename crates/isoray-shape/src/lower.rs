@@ -12,6 +12,7 @@ use crate::algebraic::{taylor_bound, xyz_ring};
 use crate::diag::{suggest, Diagnostic, SourceId, Span};
 use crate::ir::{Builder, Node, UnOp};
 use crate::library;
+use crate::lipschitz::lipschitz_bound;
 use crate::surface::{analyze, image_only_field, Analysis, BoundMethod, ParametricDef, SurfaceOptions};
 use crate::syntax::{parse, BinaryOp, Expr, ExprKind, Program, TypeName};
 use crate::types::{Type, Val, Value};
@@ -251,6 +252,13 @@ impl Library {
         let mut b = Builder::new();
         for name in &self.order {
             let s = &self.surfaces[name];
+            if s.mode == SurfaceMode::Parametric {
+                // Type-checks the coordinates and implicitizes once; a
+                // parametrization without an equation is an error only where it is traced.
+                let defaults: Vec<Value> = s.params.iter().map(|(_, v)| *v).collect();
+                self.analysis(s, &defaults)?;
+                continue;
+            }
             let mut l = Lowerer::new(&mut b, self, s.source);
             let p = l.point();
             let args: Vec<Val> = s.params.iter().map(|(_, v)| v.lower(l.b)).collect();
@@ -669,7 +677,8 @@ impl<'a> Lowerer<'a> {
     }
 
     /// The traced distance of an implicit surface: the Taylor-root bound of
-    /// its square-free part when the equation is a polynomial, else f/|∇f|.
+    /// its square-free part when the equation is a polynomial, else the
+    /// Lipschitz bound over a ball (or f/|∇f| when asked for).
     fn implicit_distance(
         &mut self,
         s: &Surface,
@@ -679,28 +688,37 @@ impl<'a> Lowerer<'a> {
         span: Span,
     ) -> Result<Val, Diagnostic> {
         self.check_gradient(s, f)?;
-        if s.options.bound != BoundMethod::FirstOrder {
-            let why = match self.const_values(params) {
-                Some(vals) => {
-                    let a = self.lib.analysis(s, &vals)?;
-                    match &a.equation {
-                        Ok(eq) => {
-                            let d = taylor_bound(self.b, &xyz_ring(), &eq.poly, [p.c[0], p.c[1], p.c[2]]);
-                            return Ok(self.apply_factor(s, d));
-                        }
-                        Err(why) => why.clone(),
-                    }
-                }
-                None => "its parameters are not constants here".to_string(),
-            };
-            if s.options.bound == BoundMethod::Taylor {
-                return Err(self
-                    .err(span, format!("surface `{}` asks for bound = \"taylor\", but {why}", s.name))
-                    .with_label("no Taylor-root bound for this call")
-                    .with_note("the Taylor-root bound needs a polynomial equation with constant parameters; use bound = \"first-order\""));
-            }
+        let method = s.options.bound;
+        if method == BoundMethod::FirstOrder {
+            let d = first_order(self.b, f);
+            return Ok(self.apply_factor(s, d));
         }
-        let d = first_order(self.b, f);
+        let Some(vals) = self.const_values(params) else {
+            return Err(self
+                .err(span, format!("surface `{}` needs constant parameters here", s.name))
+                .with_label("a parameter is not a constant")
+                .with_note("its distance bound is derived once per set of parameter values; or set bound = \"first-order\" on the surface"));
+        };
+        let a = self.lib.analysis(s, &vals)?;
+        let pc = [p.c[0], p.c[1], p.c[2]];
+        let d = match (&a.equation, method) {
+            (Ok(eq), BoundMethod::Auto | BoundMethod::Taylor) => taylor_bound(self.b, &xyz_ring(), &eq.poly, pc),
+            (Err(why), BoundMethod::Taylor) => {
+                return Err(self
+                    .err(
+                        span,
+                        format!("surface `{}` asks for bound = \"taylor\", but {why}", s.name),
+                    )
+                    .with_label("no Taylor-root bound for this call")
+                    .with_note(
+                        "the Taylor-root bound needs a polynomial equation; use bound = \"lipschitz\" or \"auto\"",
+                    ))
+            }
+            _ => match &a.field {
+                Some(field) => lipschitz_bound(field, self.b, pc),
+                None => first_order(self.b, f),
+            },
+        };
         Ok(self.apply_factor(s, d))
     }
 
@@ -726,11 +744,13 @@ impl<'a> Lowerer<'a> {
             }
         };
         let pc = [p.c[0], p.c[1], p.c[2]];
-        let mut d = if s.options.bound == BoundMethod::FirstOrder {
-            let f = crate::algebraic::build_equation(self.b, &eq.poly, pc);
-            first_order(self.b, f)
-        } else {
-            taylor_bound(self.b, &xyz_ring(), &eq.poly, pc)
+        let mut d = match (s.options.bound, &a.field) {
+            (BoundMethod::FirstOrder, _) => {
+                let f = crate::algebraic::build_equation(self.b, &eq.poly, pc);
+                first_order(self.b, f)
+            }
+            (BoundMethod::Lipschitz, Some(field)) => lipschitz_bound(field, self.b, pc),
+            _ => taylor_bound(self.b, &xyz_ring(), &eq.poly, pc),
         };
         if let (true, Some(coords)) = (s.options.image_only, a.parametrization.as_ref()) {
             let def = s.parametric.as_ref().expect("a parametric surface");

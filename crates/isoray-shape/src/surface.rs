@@ -20,6 +20,7 @@ use num_traits::One;
 use crate::algebraic::{eval_with_scale, squarefree_part, taylor_size, xyz_ring};
 use crate::diag::{Diagnostic, SourceId};
 use crate::ir::{Builder, Node};
+use crate::lipschitz::Field;
 use crate::lower::{Library, Surface, SurfaceMode};
 use crate::syntax::Program;
 use crate::types::Value;
@@ -32,19 +33,23 @@ pub enum BoundMethod {
     Auto,
     /// The guaranteed Taylor-root bound (an error when the equation is not a polynomial).
     Taylor,
+    /// The Lipschitz bound of the field over a ball, by interval arithmetic
+    /// on the exact gradient (any equation; slower than Taylor).
+    Lipschitz,
     /// The first-order estimate f / |∇f| (fast, not a bound everywhere).
     FirstOrder,
 }
 
 impl BoundMethod {
     /// The names accepted in scene files.
-    pub const NAMES: &'static [&'static str] = &["auto", "taylor", "first-order"];
+    pub const NAMES: &'static [&'static str] = &["auto", "taylor", "lipschitz", "first-order"];
 
     /// Parses a name of [`BoundMethod::NAMES`].
     pub fn parse(s: &str) -> Option<BoundMethod> {
         match s {
             "auto" => Some(BoundMethod::Auto),
             "taylor" => Some(BoundMethod::Taylor),
+            "lipschitz" => Some(BoundMethod::Lipschitz),
             "first-order" => Some(BoundMethod::FirstOrder),
             _ => None,
         }
@@ -122,6 +127,9 @@ pub struct Analysis {
     pub parametrization: Option<[RatFunc; 3]>,
     /// The implicitization (parametric surfaces).
     pub implicitization: Option<Implicitization>,
+    /// The equation as a field with its gradient, for the Lipschitz bound
+    /// (None for parametric surfaces that have no equation).
+    pub field: Option<Field>,
     /// Named phases and their durations.
     pub timings: Vec<(&'static str, Duration)>,
 }
@@ -184,6 +192,7 @@ fn analyze_implicit(lib: &Library, s: &Surface, params: &[Value]) -> Result<Anal
     let ring = xyz_ring();
     let rf = crate::algebraic::to_rational(&b, f, [Some(0), Some(1), Some(2)], &ring);
     timings.push(("conversion to a polynomial", t.elapsed()));
+    let field = Some(Field::new(b, f));
     let equation = match rf {
         Err(op) => Err(format!("its equation uses {op}, so it is not a polynomial")),
         Ok(rf) => {
@@ -201,6 +210,7 @@ fn analyze_implicit(lib: &Library, s: &Surface, params: &[Value]) -> Result<Anal
         equation,
         parametrization: None,
         implicitization: None,
+        field,
         timings,
     })
 }
@@ -243,6 +253,7 @@ fn analyze_parametric(lib: &Library, s: &Surface, params: &[Value]) -> Result<An
                 )),
                     parametrization: None,
                     implicitization: None,
+                    field: None,
                     timings,
                 })
             }
@@ -312,9 +323,14 @@ fn analyze_parametric(lib: &Library, s: &Surface, params: &[Value]) -> Result<An
             s.name
         )));
     }
+    let mut fb = Builder::new();
+    let at = [fb.x(), fb.y(), fb.z()];
+    let f = crate::algebraic::build_equation(&mut fb, &poly, at);
+    let field = Some(Field::new(fb, f));
     let equation = equation_from(poly, false, &mut timings);
     Ok(Analysis {
         equation,
+        field,
         parametrization: Some(coords),
         implicitization: Some(Implicitization {
             method,
@@ -536,6 +552,9 @@ pub fn image_only_field(
     b.max(unsigned, gap)
 }
 
+const LIPSCHITZ_TEXT: &str =
+    "Lipschitz bound: |f(p)| / sup |grad f| over a ball around p, by interval arithmetic on the exact gradient";
+
 /// Renders an analysis as the lines `isoray surface` prints.
 pub fn describe(name: &str, s: &Surface, a: &Analysis) -> String {
     let mut out = String::new();
@@ -574,6 +593,7 @@ pub fn describe(name: &str, s: &Surface, a: &Analysis) -> String {
             let factor = s.options.lipschitz_factor;
             let bound = match s.options.bound {
                 BoundMethod::FirstOrder => "first-order estimate f / |grad f| (exact symbolic gradient)".to_string(),
+                BoundMethod::Lipschitz => LIPSCHITZ_TEXT.to_string(),
                 _ => format!(
                     "Taylor-root bound: smallest root of |f(p)| = sum_k M_k d^k, {} Taylor coefficient polynomials",
                     eq.taylor_terms
@@ -594,8 +614,10 @@ pub fn describe(name: &str, s: &Surface, a: &Analysis) -> String {
             out.push_str(&format!("equation:  none: {why}\n"));
             let bound = if s.mode == SurfaceMode::Parametric {
                 "none: this surface cannot be sphere-traced"
-            } else {
+            } else if s.options.bound == BoundMethod::FirstOrder {
                 "first-order estimate f / |grad f| (exact symbolic gradient)"
+            } else {
+                LIPSCHITZ_TEXT
             };
             out.push_str(&format!("bound:     {bound}\n"));
         }
@@ -611,4 +633,38 @@ pub fn describe(name: &str, s: &Surface, a: &Analysis) -> String {
         out.push_str(&format!("time:      {what}: {:.3} ms\n", d.as_secs_f64() * 1e3));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use isoray_algebra::parse_rational;
+
+    fn rf(text: &str) -> RatFunc {
+        parse_rational(&st_ring(), text).unwrap()
+    }
+
+    #[test]
+    fn a_wrong_equation_fails_the_check() {
+        let sphere = [
+            rf("2*s/(s^2+t^2+1)"),
+            rf("2*t/(s^2+t^2+1)"),
+            rf("(s^2+t^2-1)/(s^2+t^2+1)"),
+        ];
+        let ring = xyz_ring();
+        let right = isoray_algebra::parse_poly(&ring, "x^2 + y^2 + z^2 - 1").unwrap();
+        let wrong = isoray_algebra::parse_poly(&ring, "x^2 + y^2 + z^2 - 1001/1000").unwrap();
+        let (n, worst) = verify(&sphere, &right, [[-3.0, 3.0], [-3.0, 3.0]]);
+        assert!(n > 300 && worst.unwrap().2 < 1e-12);
+        let (_, worst) = verify(&sphere, &wrong, [[-3.0, 3.0], [-3.0, 3.0]]);
+        assert!(worst.unwrap().2 > VERIFY_TOLERANCE);
+    }
+
+    #[test]
+    fn bound_names_parse() {
+        for n in BoundMethod::NAMES {
+            assert!(BoundMethod::parse(n).is_some());
+        }
+        assert_eq!(BoundMethod::parse("exact"), None);
+    }
 }
