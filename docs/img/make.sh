@@ -14,6 +14,11 @@ if [ ! -x "$bin" ]; then
     (cd "$root" && cargo build --release -p isoray)
 fi
 if [ $# -eq 0 ]; then
+    # The example galleries, at thumbnail size.
+    for ex in surfaces algebraic; do
+        "$bin" render "$root/examples/$ex.toml" -o "$here/$ex.png" --width 640 --height 360 --quiet
+        echo "$ex.png"
+    done
     set -- $(cd "$here/scenes" && ls *.toml | sed 's/\.toml$//')
 fi
 for name in "$@"; do

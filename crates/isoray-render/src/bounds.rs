@@ -52,7 +52,7 @@ impl BoundCheck {
 const STEP_FRACTION: f64 = 0.25;
 
 /// Steps per ray, at most.
-const MAX_SAMPLES: usize = 2000;
+const MAX_SAMPLES: usize = 1000;
 
 /// Checks object `object` of the scene on a grid of `nx` × `ny` camera rays.
 pub fn check_object(scene: &Scene, object: usize, nx: u32, ny: u32) -> BoundCheck {
@@ -138,10 +138,18 @@ pub fn check_object(scene: &Scene, object: usize, nx: u32, ny: u32) -> BoundChec
     }
 }
 
-/// Checks every object that calls an implicit or parametric surface.
+/// Checks every object that calls an implicit or parametric surface, except
+/// those whose surfaces are all `image_only` (unsigned fields have no sign
+/// change to find).
 pub fn check_scene(scene: &Scene) -> Vec<BoundCheck> {
     (0..scene.objects.len())
-        .filter(|&i| !scene.equation_surfaces(i).is_empty())
-        .map(|i| check_object(scene, i, 48, 27))
+        .filter(|&i| {
+            let names = scene.equation_surfaces(i);
+            !names.is_empty()
+                && !names
+                    .iter()
+                    .all(|n| scene.library.surface(n).is_some_and(|s| s.options.image_only))
+        })
+        .map(|i| check_object(scene, i, 64, 36))
         .collect()
 }

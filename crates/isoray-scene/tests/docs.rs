@@ -14,7 +14,11 @@ struct Block {
 }
 
 fn scene_md() -> String {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/SCENE.md");
+    doc("SCENE.md")
+}
+
+fn doc(name: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs").join(name);
     std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
 }
 
@@ -54,6 +58,35 @@ fn calls(text: &str, name: &str) -> bool {
             .next_back()
             .is_some_and(|c| c.is_ascii_alphanumeric() || c == '_')
     })
+}
+
+#[test]
+fn surfaces_md_scenes_load() {
+    let md = doc("SURFACES.md");
+    let mut scenes = 0;
+    for b in blocks(&md).iter().filter(|b| b.tag == "toml") {
+        scenes += 1;
+        if let Err(e) = isoray_scene::load_str(&b.text, "SURFACES.md", &[]) {
+            panic!("the ```toml block at SURFACES.md line {} does not load:\n{e}", b.line);
+        }
+    }
+    assert!(scenes >= 1);
+}
+
+#[test]
+fn example_scenes_load() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let path = e.unwrap().path();
+        if path.extension().is_some_and(|x| x == "toml") {
+            n += 1;
+            if let Err(e) = isoray_scene::load(&path, &[]) {
+                panic!("{} does not load:\n{e}", path.display());
+            }
+        }
+    }
+    assert!(n >= 5, "{n} example scenes");
 }
 
 #[test]

@@ -734,23 +734,22 @@ impl<'a> Lowerer<'a> {
                 .with_note("each set of parameter values is implicitized once, when the scene loads"));
         };
         let a = self.lib.analysis(s, &vals)?;
-        let eq = match &a.equation {
-            Ok(eq) => eq,
-            Err(why) => {
+        let pc = [p.c[0], p.c[1], p.c[2]];
+        let mut d = match (&a.equation, &a.field, s.options.bound) {
+            (Ok(eq), _, BoundMethod::FirstOrder) => {
+                let f = crate::algebraic::build_equation(self.b, &eq.poly, pc);
+                first_order(self.b, f)
+            }
+            (_, Some(field), BoundMethod::Lipschitz) | (Err(_), Some(field), BoundMethod::Auto) => {
+                lipschitz_bound(field, self.b, pc)
+            }
+            (Ok(eq), _, _) => taylor_bound(self.b, &xyz_ring(), &eq.poly, pc),
+            (Err(why), _, _) => {
                 return Err(self
                     .err(span, format!("surface `{}` cannot be sphere-traced: {why}", s.name))
                     .with_label("no implicit equation")
                     .with_note("only rational parametrizations can be implicitized; others will be tessellated by the mesh pipeline"))
             }
-        };
-        let pc = [p.c[0], p.c[1], p.c[2]];
-        let mut d = match (s.options.bound, &a.field) {
-            (BoundMethod::FirstOrder, _) => {
-                let f = crate::algebraic::build_equation(self.b, &eq.poly, pc);
-                first_order(self.b, f)
-            }
-            (BoundMethod::Lipschitz, Some(field)) => lipschitz_bound(field, self.b, pc),
-            _ => taylor_bound(self.b, &xyz_ring(), &eq.poly, pc),
         };
         if let (true, Some(coords)) = (s.options.image_only, a.parametrization.as_ref()) {
             let def = s.parametric.as_ref().expect("a parametric surface");

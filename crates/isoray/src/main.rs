@@ -220,6 +220,11 @@ fn cmd_check(scene_path: &Path, overrides: &[String]) -> Result<(), Failure> {
         let what = object_label(&scene, c.object);
         if c.violated() {
             eprintln!("{}", violation_warning(&what, &c));
+        } else if c.crossings == 0 {
+            println!(
+                "bound: {what}: not checked: none of {} sampled rays crosses its surface (out of view, or an unsigned field such as image_only)",
+                c.rays
+            );
         } else {
             println!(
                 "bound: {what}: holds on {} of {} sampled rays that reach the surface (largest field/distance ratio {:.3})",
