@@ -645,6 +645,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
     let mut lib = Library::new();
     let mut params = Vec::new();
     let mut surface_materials: Vec<(String, usize)> = Vec::new();
+    let mut param_ranges: Vec<ParamRange> = Vec::new();
     if let Some(v) = top.get("params") {
         let Item::Table(entries) = &v.item else {
             return Err(src.error(
@@ -655,7 +656,8 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
             ));
         };
         for e in entries {
-            let val = param_value(src, &e.value, &format!("params.{}", e.key))?;
+            let key = format!("params.{}", e.key);
+            let val = param_spec(src, &e.value, &key, &mut param_ranges)?;
             check_name(src, &e.key, e.key_origin)?;
             lib.set_param(&e.key, val);
             params.push((e.key.clone(), val));
@@ -698,7 +700,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     check_name(src, &p.key, p.key_origin)?;
                     sparams.push((
                         p.key.clone(),
-                        param_value(src, &p.value, &format!("{ctx}.params.{}", p.key))?,
+                        param_spec(src, &p.value, &format!("{ctx}.params.{}", p.key), &mut param_ranges)?,
                     ));
                 }
             }
@@ -880,6 +882,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         params,
         shape,
         library: lib,
+        param_ranges,
     })
 }
 
@@ -1054,6 +1057,61 @@ fn check_name(src: &Sources, name: &str, origin: Origin) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// A parameter: a value, or `{ default = value, range = [min, max] }` (the
+/// range, for sliders, is recorded in `ranges` under `ctx`).
+fn param_spec(src: &Sources, v: &Located, ctx: &str, ranges: &mut Vec<ParamRange>) -> Result<Value> {
+    let Item::Table(_) = &v.item else {
+        return param_value(src, v, ctx);
+    };
+    let mut r = Reader::new(src, v, ctx)?;
+    let Some(dv) = r.get("default") else {
+        return Err(src.error(
+            v.origin,
+            format!("`{ctx}` needs a `default` value"),
+            Some("add default = ..."),
+            &["for example { default = 1.0, range = [0.5, 2.0] }".into()],
+        ));
+    };
+    let value = param_value(src, dv, &format!("{ctx}.default"))?;
+    if let Some(rv) = r.get("range") {
+        let range = match &rv.item {
+            Item::Array(xs) if xs.len() == 2 => match (&xs[0].item, &xs[1].item) {
+                (Item::Num(a, _), Item::Num(b, _)) if a.is_finite() && b.is_finite() && a < b => Some([*a, *b]),
+                _ => None,
+            },
+            _ => None,
+        };
+        let Some(range) = range else {
+            return Err(r.err(rv, "range", "[min, max] with min < max"));
+        };
+        let Value::Float(x) = value else {
+            return Err(src.error(
+                rv.origin,
+                format!("`{ctx}.range` applies to number parameters only"),
+                Some("the default is a vector"),
+                &[],
+            ));
+        };
+        if x < range[0] || x > range[1] {
+            return Err(src.error(
+                dv.origin,
+                format!(
+                    "`{ctx}.default` = {x} is outside its range [{}, {}]",
+                    range[0], range[1]
+                ),
+                Some("outside the range"),
+                &[],
+            ));
+        }
+        ranges.push(ParamRange {
+            key: ctx.to_string(),
+            range,
+        });
+    }
+    r.finish(&["default", "range"])?;
+    Ok(value)
 }
 
 fn param_value(src: &Sources, v: &Located, ctx: &str) -> Result<Value> {

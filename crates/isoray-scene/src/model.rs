@@ -261,6 +261,17 @@ pub struct Scene {
     pub shape: Shape,
     /// The scene's parameters and user surfaces, with their cached analyses.
     pub library: Library,
+    /// Ranges declared for number parameters (for sliders), in file order.
+    pub param_ranges: Vec<ParamRange>,
+}
+
+/// The range declared for a number parameter: `{ default = 1.0, range = [0.5, 2.0] }`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamRange {
+    /// Where the parameter is: `params.NAME` or `surface.NAME.params.PARAM`.
+    pub key: String,
+    /// [min, max].
+    pub range: [f64; 2],
 }
 
 impl Scene {

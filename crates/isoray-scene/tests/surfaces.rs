@@ -221,3 +221,29 @@ fn surface_errors_name_the_place() {
     let e = err("[surface.w]\nimplicit = \"x - 1.0\"\nmaterial = \"nope\"\n[[object]]\nshape = \"w(p)\"\n");
     assert!(e.message.contains("no material named \"nope\""), "{e}");
 }
+
+#[test]
+fn parameters_may_declare_ranges() {
+    let s = scene(
+        "[params]\nk = { default = 0.5, range = [0.0, 1.0] }\n\
+         [surface.sphere_eq]\nparams = { r = { default = 1.0, range = [0.25, 3.0] }, c = [0.0, 0.0, 0.0] }\nimplicit = \"(x - c.x)^2 + y^2 + z^2 - r^2\"\n\
+         [[object]]\nshape = \"sphere_eq(p) + k * 0.0\"\n",
+    );
+    let keys: Vec<(&str, [f64; 2])> = s.param_ranges.iter().map(|r| (r.key.as_str(), r.range)).collect();
+    assert_eq!(
+        keys,
+        [("params.k", [0.0, 1.0]), ("surface.sphere_eq.params.r", [0.25, 3.0])]
+    );
+    assert!(s.distance([1.0, 0.0, 0.0]).abs() < 1e-12);
+    let e = err("[surface.s]\nparams = { r = { default = 5.0, range = [0.0, 1.0] } }\nimplicit = \"x - r\"\n[[object]]\nshape = \"s(p)\"\n");
+    assert!(e.message.contains("outside its range"), "{e}");
+    assert_eq!(e.line, Some(2));
+    let e = err(
+        "[surface.s]\nparams = { r = { range = [0.0, 1.0] } }\nimplicit = \"x - r\"\n[[object]]\nshape = \"s(p)\"\n",
+    );
+    assert!(e.message.contains("needs a `default`"), "{e}");
+    let e = err("[surface.s]\nparams = { r = { default = [1.0, 2.0], range = [0.0, 1.0] } }\nsdf = \"length(p) - r.x\"\n[[object]]\nshape = \"s(p)\"\n");
+    assert!(e.message.contains("number parameters only"), "{e}");
+    let e = err("[surface.s]\nparams = { r = { default = 1.0, range = [2.0, 1.0] } }\nsdf = \"length(p) - r\"\n[[object]]\nshape = \"s(p)\"\n");
+    assert!(e.message.contains("min < max"), "{e}");
+}
