@@ -247,3 +247,16 @@ fn parameters_may_declare_ranges() {
     let e = err("[surface.s]\nparams = { r = { default = 1.0, range = [2.0, 1.0] } }\nsdf = \"length(p) - r\"\n[[object]]\nshape = \"s(p)\"\n");
     assert!(e.message.contains("min < max"), "{e}");
 }
+
+#[test]
+fn each_surface_is_implicitized_once() {
+    let s = scene(
+        "[surface.b]\nparametric = { x = \"2*s/(s^2+t^2+1)\", y = \"2*t/(s^2+t^2+1)\", z = \"(s^2+t^2-1)/(s^2+t^2+1)\" }\n\
+         [[object]]\nshape = \"b(p)\"\n[[object]]\nshape = \"b(p - vec3(3.0, 0.0, 0.0))\"\n",
+    );
+    // The analysis made at load time is the one every later request gets.
+    let first = analysis(&s, "b");
+    let again = analysis(&s, "b");
+    assert!(std::sync::Arc::ptr_eq(&first, &again));
+    assert_eq!(first.implicitization.as_ref().unwrap().method, "groebner");
+}

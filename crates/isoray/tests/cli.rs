@@ -297,3 +297,80 @@ fn implicitize_by_interpolation_agrees_with_elimination() {
     let o = run(isoray().args(["implicitize", "--method", "fourier", "--x", "s", "--y", "t", "--z", "s"]));
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn surface_command_prints_the_derived_equation() {
+    let scene = examples().join("surfaces.toml");
+    let o = run(isoray().arg("surface").arg(&scene).arg("sphere_rational"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("equation:  x^2 + y^2 + z^2 - 1 = 0"), "{out}");
+    assert!(out.contains("degree:    2"), "{out}");
+    assert!(out.contains("Taylor-root bound"), "{out}");
+    assert!(out.contains("satisfy the equation"), "{out}");
+    assert!(out.contains("time:      implicitization:"), "{out}");
+    let o = run(isoray().arg("surface").arg(&scene).arg("sphere_rationl"));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("did you mean `sphere_rational`?"), "{}", stderr(&o));
+    let o = run(isoray().arg("surface").arg(&scene).arg("cube"));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("(sdf)"));
+}
+
+const WAVE: &str = "[camera]\nposition = [0.0, 3.0, 9.0]\n[render]\nwidth = 80\nheight = 45\n[[light]]\n\
+    [surface.wave]\nimplicit = \"y - 0.5*sin(3*x)*sin(3*z) + 1.5\"\nbound = \"first-order\"\n\
+    [[object]]\nname = \"wave\"\nshape = \"wave(p)\"\n";
+
+#[test]
+fn bound_violations_are_reported_with_a_factor() {
+    // f/|grad f| of a steep wave oversteps: check and render both say so.
+    let scene = write_scene("wave.toml", WAVE);
+    let o = run(isoray().arg("check").arg(&scene));
+    assert!(o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("warning: object 0 (`wave`): the distance estimate oversteps"),
+        "{e}"
+    );
+    assert!(
+        e.contains("set lipschitz_factor = ") && e.contains("[surface.wave]"),
+        "{e}"
+    );
+    // The suggested factor removes the violation.
+    let factor: f64 = e
+        .split("lipschitz_factor = ")
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(factor > 1.0);
+    let fixed = write_scene(
+        "wave_fixed.toml",
+        &WAVE.replace(
+            "bound = \"first-order\"",
+            &format!("bound = \"first-order\"\nlipschitz_factor = {factor}"),
+        ),
+    );
+    let o = run(isoray().arg("check").arg(&fixed));
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("bound: object 0 (`wave`): holds"));
+    // The default (Lipschitz) bound holds without a factor.
+    let guarded = write_scene("wave_lipschitz.toml", &WAVE.replace("bound = \"first-order\"\n", ""));
+    let o = run(isoray().arg("check").arg(&guarded));
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+    // Rendering the overstepping field warns too.
+    let o = run(isoray()
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(tmp("wave.png"))
+        .arg("-q"));
+    assert!(o.status.success());
+    assert!(
+        stderr(&o).contains("ray steps went through a surface"),
+        "{}",
+        stderr(&o)
+    );
+}
