@@ -3,7 +3,8 @@
 //! Sphere tracing may step as far as the field says; if the field is larger
 //! than the distance to the surface, rays step through it. For each object,
 //! rays from the camera are marched with short steps until the field changes
-//! sign; the crossing is found by bisection, and every sample before it must
+//! sign (the crossing is then found by bisection) or falls to about zero (an
+//! unsigned field such as `abs(f)`), and every sample before it must
 //! satisfy |field| ≤ distance along the ray to the crossing. The largest
 //! ratio field / distance is the factor by which the field oversteps: a
 //! `lipschitz_factor` at least that large on the surface makes the steps safe.
@@ -87,14 +88,47 @@ pub fn check_object(scene: &Scene, object: usize, nx: u32, ny: u32) -> BoundChec
                     return None;
                 }
                 let sign = first.signum();
+                // The worst ratio of the samples before a crossing at `crossing`,
+                // ignoring samples closer to it than `near`.
+                let worst_before = |samples: &[(f64, f64)], crossing: f64, near: f64| {
+                    let mut worst = (0.0f64, at(0.0));
+                    for &(ti, vi) in samples {
+                        let gap = crossing - ti;
+                        if gap > near {
+                            let r = vi.abs() / gap;
+                            if r > worst.0 {
+                                worst = (r, at(ti));
+                            }
+                        }
+                    }
+                    worst
+                };
                 while t <= tmax && samples.len() < MAX_SAMPLES {
                     let v = f(t);
                     if !v.is_finite() {
                         return None;
                     }
-                    if v.signum() != sign && v != 0.0 {
-                        // Bisect the crossing between the last sample and t.
-                        let (mut a, mut b) = (samples.last().map(|s| s.0).unwrap_or(0.0), t);
+                    let touch = 1e-5 * (1.0 + t);
+                    // A sign change at t, or just past a near-zero value at t.
+                    let mut bracket =
+                        (v.signum() != sign && v != 0.0).then(|| (samples.last().map(|s| s.0).unwrap_or(0.0), t));
+                    if bracket.is_none() && v.abs() < touch {
+                        for k in [2.0, 10.0, 50.0] {
+                            let u = t + k * touch;
+                            let w = f(u);
+                            if w.signum() != sign && w != 0.0 {
+                                bracket = Some((t, u));
+                                break;
+                            }
+                        }
+                        if bracket.is_none() {
+                            // The field reaches zero without changing sign (an
+                            // unsigned field such as abs(f), or a tangency): the
+                            // surface is at least |v| further on.
+                            return Some(worst_before(&samples, t + v.abs(), 1000.0 * touch));
+                        }
+                    }
+                    if let Some((mut a, mut b)) = bracket {
                         for _ in 0..60 {
                             let m = 0.5 * (a + b);
                             if f(m).signum() == sign {
@@ -103,21 +137,10 @@ pub fn check_object(scene: &Scene, object: usize, nx: u32, ny: u32) -> BoundChec
                                 b = m;
                             }
                         }
-                        let crossing = a;
-                        let mut worst = (0.0f64, at(0.0));
-                        for &(ti, vi) in &samples {
-                            let gap = crossing - ti;
-                            if gap > 1e-9 * (1.0 + crossing) {
-                                let r = vi.abs() / gap;
-                                if r > worst.0 {
-                                    worst = (r, at(ti));
-                                }
-                            }
-                        }
-                        return Some(worst);
+                        return Some(worst_before(&samples, a, 1e-9 * (1.0 + a)));
                     }
                     samples.push((t, v));
-                    t += (v.abs() * STEP_FRACTION).clamp(1e-5 * (1.0 + t), max_step);
+                    t += (v.abs() * STEP_FRACTION).clamp(touch, max_step);
                 }
                 None
             },
@@ -139,8 +162,8 @@ pub fn check_object(scene: &Scene, object: usize, nx: u32, ny: u32) -> BoundChec
 }
 
 /// Checks every object that calls an implicit or parametric surface, except
-/// those whose surfaces are all `image_only` (unsigned fields have no sign
-/// change to find).
+/// those whose surfaces are all `image_only` (their field is only
+/// approximately a bound, by design; see docs/SURFACES.md).
 pub fn check_scene(scene: &Scene) -> Vec<BoundCheck> {
     (0..scene.objects.len())
         .filter(|&i| {

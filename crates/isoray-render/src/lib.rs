@@ -260,10 +260,16 @@ impl<'s> Worker<'s> {
         evals += m as u64 * gradient_cost(ctx.gradient);
         for k in 0..m {
             let n = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]).normalize_or_zero();
-            // Degenerate gradient: face the viewer.
             let i = hs.idx[k];
+            let dir = Vec3::new(self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]);
+            // Degenerate gradient: face the viewer. A normal facing away from
+            // the ray (a hit just past the zero set of an unsigned field such
+            // as abs(f), or an open sheet seen from behind) is turned to face
+            // it: surfaces are shaded on the side the ray sees.
             let n = if n == Vec3::ZERO {
-                -Vec3::new(self.rays.dx[i], self.rays.dy[i], self.rays.dz[i])
+                -dir
+            } else if n.dot(dir) > 0.0 {
+                -n
             } else {
                 n
             };

@@ -35,11 +35,17 @@ const ROOT_REFINEMENTS: usize = 2;
 /// The Taylor-root bound never exceeds this (keeps the refinement finite).
 pub const TAYLOR_CAP: f64 = 1e6;
 
-/// The exact rational number written by the shortest decimal that round-trips
-/// to `v` (so `0.1` becomes 1/10, not the binary fraction nearest to it).
+/// The rational number a constant stands for: the simplest fraction within
+/// a few units in the last place of `v` when one has a small denominator
+/// (so 1.16 − 1 ulp, from folding `R^2 - r^2` with R = 1, r = 0.4, becomes
+/// 29/25), else the exact value of the shortest decimal that round-trips to
+/// `v` (so `0.1` becomes 1/10, not the binary fraction nearest to it).
 pub fn rat_from_f64(v: f64) -> Option<Rat> {
     if !v.is_finite() {
         return None;
+    }
+    if let Some(r) = simple_fraction(v) {
+        return Some(r);
     }
     let text = format!("{v}");
     let (neg, digits) = match text.strip_prefix('-') {
@@ -51,6 +57,36 @@ pub fn rat_from_f64(v: f64) -> Option<Rat> {
     let den = num_traits::pow(Int::from(10), frac_part.len());
     let r = Rat::new(num, den);
     Some(if neg { -r } else { r })
+}
+
+/// The first continued-fraction convergent p/q of `v` with q ≤ 10⁶ that is
+/// within 4 ulp of it.
+fn simple_fraction(v: f64) -> Option<Rat> {
+    let tol = 4.0 * f64::EPSILON * v.abs().max(f64::MIN_POSITIVE);
+    let (mut p0, mut q0, mut p1, mut q1) = (0i128, 1i128, 1i128, 0i128);
+    let mut x = v.abs();
+    for _ in 0..40 {
+        let a = x.floor();
+        if a > 1e12 {
+            return None;
+        }
+        let a = a as i128;
+        let (p2, q2) = (a * p1 + p0, a * q1 + q0);
+        if q2 > 1_000_000 {
+            return None;
+        }
+        if ((p2 as f64) / (q2 as f64) - v.abs()).abs() <= tol {
+            let r = Rat::new(Int::from(p2), Int::from(q2));
+            return Some(if v < 0.0 { -r } else { r });
+        }
+        (p0, q0, p1, q1) = (p1, q1, p2, q2);
+        let frac = x - a as f64;
+        if frac == 0.0 {
+            return None;
+        }
+        x = 1.0 / frac;
+    }
+    None
 }
 
 /// Converts a DAG node to a rational function in `ring`, mapping the point
@@ -479,6 +515,13 @@ mod tests {
         assert_eq!(rat_from_f64(-2.5), Some(Rat::new((-5).into(), 2.into())));
         assert_eq!(rat_from_f64(3.0), Some(Rat::from_integer(3.into())));
         assert_eq!(rat_from_f64(f64::NAN), None);
+        // Folded constants come back as the fractions they stand for.
+        assert_eq!(rat_from_f64(1.16), Some(Rat::new(29.into(), 25.into())));
+        assert_eq!(rat_from_f64(0.7 * 0.7 - 0.3 * 0.3), Some(Rat::new(2.into(), 5.into())));
+        assert_eq!(rat_from_f64(1.0 / 3.0), Some(Rat::new(1.into(), 3.into())));
+        // Irrational constants keep their decimal value.
+        let phi = rat_from_f64(1.618033988749895).unwrap();
+        assert!(phi.denom() > &Int::from(1_000_000));
     }
 
     #[test]
