@@ -29,6 +29,19 @@ use crate::ir::{BinOp, Builder, Node, Op, UnOp};
 /// The largest integer exponent expanded when converting `a ^ k`.
 const MAX_POWER: f64 = 64.0;
 
+/// The largest degree a converted expression may reach.
+pub const MAX_CONVERT_DEGREE: i64 = 32;
+
+/// The most terms a product may have while converting (bounds time and memory:
+/// exact rational arithmetic on larger expansions takes seconds).
+const MAX_CONVERT_TERMS: usize = 3_000;
+
+/// The most monomials a polynomial of degree d in three variables can have.
+pub fn dense_terms(d: i64) -> usize {
+    let d = d.max(0) as usize;
+    (d + 1) * (d + 2) * (d + 3) / 6
+}
+
 /// Newton/chord refinements of the Taylor-root bound.
 const ROOT_REFINEMENTS: usize = 2;
 
@@ -119,28 +132,55 @@ fn normalize(ring: &Ring, f: RatFunc) -> RatFunc {
     f
 }
 
-fn rf_add(ring: &Ring, a: &RatFunc, c: &RatFunc, sub: bool) -> RatFunc {
+fn rf_add(ring: &Ring, a: &RatFunc, c: &RatFunc, sub: bool) -> Result<RatFunc, String> {
     let minus = |p: &Poly<Rat>| if sub { p.neg() } else { p.clone() };
     if a.den == c.den {
-        return RatFunc {
+        return Ok(RatFunc {
             num: a.num.add(ring, &minus(&c.num)),
             den: a.den.clone(),
-        };
+        });
     }
-    RatFunc {
+    let deg = (a.num.degree() + c.den.degree()).max(a.den.degree() + c.den.degree());
+    check_size(
+        deg,
+        (a.num.len() * c.den.len())
+            .max(a.den.len() * c.den.len())
+            .min(dense_terms(deg)),
+    )?;
+    Ok(RatFunc {
         num: a.num.mul(ring, &c.den).add(ring, &minus(&c.num.mul(ring, &a.den))),
         den: a.den.mul(ring, &c.den),
-    }
+    })
 }
 
-fn rf_mul(ring: &Ring, a: &RatFunc, c: &RatFunc) -> RatFunc {
-    normalize(
+/// Refuses products that would be too large to expand.
+fn check_size(deg: i64, terms: usize) -> Result<(), String> {
+    if deg > MAX_CONVERT_DEGREE {
+        return Err(format!(
+            "an expression of degree {deg} (more than {MAX_CONVERT_DEGREE}, too large to expand)"
+        ));
+    }
+    if terms > MAX_CONVERT_TERMS {
+        return Err(format!("an expression too large to expand (about {terms} terms)"));
+    }
+    Ok(())
+}
+
+fn rf_mul(ring: &Ring, a: &RatFunc, c: &RatFunc) -> Result<RatFunc, String> {
+    let deg = (a.num.degree() + c.num.degree()).max(a.den.degree() + c.den.degree());
+    check_size(
+        deg,
+        (a.num.len() * c.num.len())
+            .max(a.den.len() * c.den.len())
+            .min(dense_terms(deg)),
+    )?;
+    Ok(normalize(
         ring,
         RatFunc {
             num: a.num.mul(ring, &c.num),
             den: a.den.mul(ring, &c.den),
         },
-    )
+    ))
 }
 
 fn rf_inv(ring: &Ring, a: &RatFunc) -> Result<RatFunc, String> {
@@ -159,6 +199,14 @@ fn rf_inv(ring: &Ring, a: &RatFunc) -> Result<RatFunc, String> {
 fn rf_pow(ring: &Ring, a: &RatFunc, k: i64) -> Result<RatFunc, String> {
     let base = if k < 0 { rf_inv(ring, a)? } else { a.clone() };
     let e = k.unsigned_abs() as u32;
+    let deg = base.num.degree().max(base.den.degree()) * e as i64;
+    let terms = base
+        .num
+        .len()
+        .max(base.den.len())
+        .saturating_pow(e.min(16))
+        .min(dense_terms(deg.min(1 << 20)));
+    check_size(deg, terms)?;
     Ok(RatFunc {
         num: base.num.pow(ring, e),
         den: base.den.pow(ring, e),
@@ -195,7 +243,7 @@ fn convert(
                     num: a.num.neg(),
                     den: a.den,
                 },
-                UnOp::Square => rf_mul(ring, &a, &a),
+                UnOp::Square => rf_mul(ring, &a, &a)?,
                 other => return Err(unary_name(other).to_string()),
             }
         }
@@ -210,10 +258,10 @@ fn convert(
             } else {
                 let (p, q) = (convert(b, x, vars, ring, memo)?, convert(b, y, vars, ring, memo)?);
                 match op {
-                    BinOp::Add => rf_add(ring, &p, &q, false),
-                    BinOp::Sub => rf_add(ring, &p, &q, true),
-                    BinOp::Mul => rf_mul(ring, &p, &q),
-                    BinOp::Div => rf_mul(ring, &p, &rf_inv(ring, &q)?),
+                    BinOp::Add => rf_add(ring, &p, &q, false)?,
+                    BinOp::Sub => rf_add(ring, &p, &q, true)?,
+                    BinOp::Mul => rf_mul(ring, &p, &q)?,
+                    BinOp::Div => rf_mul(ring, &p, &rf_inv(ring, &q)?)?,
                     BinOp::Min => return Err("min".into()),
                     BinOp::Max => return Err("max".into()),
                     BinOp::Atan2 => return Err("atan2".into()),
@@ -262,8 +310,113 @@ pub struct SquareFree {
     pub reduced: bool,
 }
 
+/// The Mersenne prime 2⁶¹ − 1, for the modular square-free test.
+const P61: u64 = (1 << 61) - 1;
+
+fn mulm(a: u64, b: u64) -> u64 {
+    ((a as u128 * b as u128) % P61 as u128) as u64
+}
+
+fn powm(mut a: u64, mut e: u64) -> u64 {
+    let mut r = 1;
+    while e > 0 {
+        if e & 1 == 1 {
+            r = mulm(r, a);
+        }
+        a = mulm(a, a);
+        e >>= 1;
+    }
+    r
+}
+
+fn rat_mod(c: &Rat) -> Option<u64> {
+    let p = Int::from(P61);
+    let n = ((c.numer() % &p + &p) % &p).to_u64()?;
+    let d = ((c.denom() % &p + &p) % &p).to_u64()?;
+    (d != 0).then(|| mulm(n, powm(d, P61 - 2)))
+}
+
+/// Dense univariate polynomial mod P61: remainder of a by b (b's leading coefficient nonzero).
+fn rem_mod(mut a: Vec<u64>, b: &[u64]) -> Vec<u64> {
+    let inv = powm(*b.last().expect("nonzero"), P61 - 2);
+    while a.len() >= b.len() {
+        let q = mulm(*a.last().expect("nonempty"), inv);
+        let shift = a.len() - b.len();
+        for (i, &bi) in b.iter().enumerate() {
+            a[shift + i] = (a[shift + i] + P61 - mulm(q, bi)) % P61;
+        }
+        a.pop();
+        while a.last() == Some(&0) {
+            a.pop();
+        }
+    }
+    a
+}
+
+/// True when `f` has no repeated factor, decided quickly with probability ≈ 1:
+/// a repeated factor g² of f, with g involving the variable v, stays a
+/// repeated factor of f restricted to a random line parallel to the v axis,
+/// which a univariate gcd with the derivative modulo a large prime detects.
+/// False means "maybe not square-free".
+pub fn probably_squarefree(f: &Poly<Rat>) -> bool {
+    let nv = f.terms().first().map(|(m, _)| m.nvars()).unwrap_or(0);
+    let mut seed = 0x2545_F491_4F6C_DD1Du64;
+    for v in 0..nv {
+        let deg = f.terms().iter().map(|(m, _)| m.exp(v)).max().unwrap_or(0) as usize;
+        if deg == 0 {
+            continue;
+        }
+        let point: Vec<u64> = (0..nv)
+            .map(|_| {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                seed % P61
+            })
+            .collect();
+        let mut u = vec![0u64; deg + 1];
+        for (m, c) in f.terms() {
+            let Some(mut t) = rat_mod(c) else { return false };
+            for (w, &x) in point.iter().enumerate() {
+                if w != v {
+                    t = mulm(t, powm(x, m.exp(w) as u64));
+                }
+            }
+            let k = m.exp(v) as usize;
+            u[k] = (u[k] + t) % P61;
+        }
+        while u.last() == Some(&0) {
+            u.pop();
+        }
+        if u.len() < 2 {
+            return false; // degenerate restriction: no conclusion
+        }
+        let mut du: Vec<u64> = (1..u.len()).map(|k| mulm(u[k], k as u64 % P61)).collect();
+        while du.last() == Some(&0) {
+            du.pop();
+        }
+        // gcd(u, u') by Euclid.
+        let (mut a, mut b) = (u, du);
+        while !b.is_empty() {
+            let r = rem_mod(a, &b);
+            a = b;
+            b = r;
+        }
+        if a.len() > 1 {
+            return false;
+        }
+    }
+    true
+}
+
 /// The square-free part of `f` within `time`; on a timeout, `f` itself.
 pub fn squarefree_part(ring: &Ring, f: &Poly<Rat>, time: std::time::Duration) -> SquareFree {
+    if probably_squarefree(f) {
+        return SquareFree {
+            poly: f.monic(),
+            reduced: false,
+        };
+    }
     let opts = GroebnerOptions {
         budget: Budget {
             time: Some(time),
@@ -414,9 +567,13 @@ fn series(b: &mut Builder, m: &[Node], d: Node) -> (Node, Node) {
     (b.mul(h, d), dh)
 }
 
-/// The number of Taylor coefficient polynomials the bound of `f` evaluates.
-pub fn taylor_size(ring: &Ring, f: &Poly<Rat>) -> usize {
-    taylor_coefficients(ring, f).iter().map(Vec::len).sum()
+/// The number of Taylor coefficient polynomials the bound of `f` evaluates,
+/// and their total number of terms.
+pub fn taylor_size(ring: &Ring, f: &Poly<Rat>) -> (usize, usize) {
+    let levels = taylor_coefficients(ring, f);
+    let polys = levels.iter().map(Vec::len).sum();
+    let terms = levels.iter().flatten().map(|(p, _)| p.len()).sum();
+    (polys, terms)
 }
 
 /// Writes the signed Taylor-root bound of the polynomial `f` (in `ring` =
@@ -522,6 +679,24 @@ mod tests {
         // Irrational constants keep their decimal value.
         let phi = rat_from_f64(1.618033988749895).unwrap();
         assert!(phi.denom() > &Int::from(1_000_000));
+    }
+
+    #[test]
+    fn modular_squarefree_test() {
+        let ring = xyz_ring();
+        let yes = [
+            "x^2 + y^2 + z^2 - 1",
+            "x^4 - 5x^2 + y^4 - 5y^2 + z^4 - 5z^2 + 10",
+            "x*y*z",
+            "x - 1",
+        ];
+        let no = ["(x^2 + y^2 + z^2 - 1)^2", "x^2*y", "(x - y)^3*(z + 1)", "(y + z)^2"];
+        for t in yes {
+            assert!(probably_squarefree(&parse_poly(&ring, t).unwrap()), "{t}");
+        }
+        for t in no {
+            assert!(!probably_squarefree(&parse_poly(&ring, t).unwrap()), "{t}");
+        }
     }
 
     #[test]

@@ -6,7 +6,9 @@
 //! exact symbolic gradient over the cube [p − r, p + r]³ (which contains the
 //! ball), evaluated as ordinary DAG nodes so the renderer's batch evaluator
 //! runs it. The radius is the first-order estimate r = |f|/|∇f(p)|: near the
-//! surface the box is small, L ≈ |∇f(p)| and the step is nearly r.
+//! surface the box is small, L ≈ |∇f(p)| and the step is nearly r. Near
+//! critical points of f, where that radius is far too large, a second radius
+//! (the geometric mean of r and the step it gave) recovers a useful step.
 
 use std::collections::HashMap;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -359,13 +361,25 @@ pub fn lipschitz_bound(field: &Field, dst: &mut Builder, p: [Node; 3]) -> Node {
     let cap = dst.constant(1e6);
     let r1 = dst.min(r1, cap);
     let r1 = dst.max(r1, tiny);
-    let l = gradient_sup(src, grad, dst, p, r1);
-    let l = dst.max(l, tiny);
-    let d = dst.div(big_f, l);
-    let d = dst.min(d, r1);
-    // A NaN (an interval that overflowed) gives no step.
+    // First at r₁; where |∇f(p)| understates the gradient nearby (near a
+    // critical point of f) that gives a tiny step d₁, and the geometric mean
+    // √(d₁·r₁) is tried as well.
     let zero = dst.constant(0.0);
-    let best = dst.select(d, d, zero);
+    let step = |dst: &mut Builder, r: Node| {
+        let l = gradient_sup(src, grad, dst, p, r);
+        let l = dst.max(l, tiny);
+        let d = dst.div(big_f, l);
+        let d = dst.min(d, r);
+        // A NaN (an interval that overflowed) gives no step.
+        dst.select(d, d, zero)
+    };
+    let d1 = step(dst, r1);
+    let floor = dst.mul_c(r1, 1e-12);
+    let d1f = dst.max(d1, floor);
+    let m = dst.mul(d1f, r1);
+    let r2 = dst.sqrt(m);
+    let d2 = step(dst, r2);
+    let best = dst.max(d1, d2);
     let neg = dst.neg(best);
     dst.select(value, best, neg)
 }
@@ -417,6 +431,23 @@ mod tests {
         }
         // Far from the surface the step is a good fraction of the distance.
         assert!(e.eval(0.0, 3.0, 0.0) > 0.5);
+    }
+
+    #[test]
+    fn critical_points_still_give_useful_steps() {
+        // The centre of the sphere is a critical point of |p|² − 1: the
+        // first-order radius is huge there, the second radius is not.
+        let tape = bound("x^2 + y^2 + z^2 - 1");
+        let mut e = PointEvaluator::<f64>::new(&tape);
+        let d = e.eval(0.0, 0.0, 0.0);
+        assert!((-1.0..=-0.2).contains(&d), "{d}");
+        for r in [0.5, 0.9, 1.1, 2.0, 5.0] {
+            let d = e.eval(r, 0.0, 0.0);
+            assert!(
+                d.abs() <= (r - 1.0f64).abs() + 1e-12 && d.signum() == (r - 1.0f64).signum(),
+                "{r}: {d}"
+            );
+        }
     }
 
     #[test]

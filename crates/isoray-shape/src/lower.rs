@@ -701,18 +701,21 @@ impl<'a> Lowerer<'a> {
         };
         let a = self.lib.analysis(s, &vals)?;
         let pc = [p.c[0], p.c[1], p.c[2]];
-        let d = match (&a.equation, method) {
-            (Ok(eq), BoundMethod::Auto | BoundMethod::Taylor) => taylor_bound(self.b, &xyz_ring(), &eq.poly, pc),
+        let taylor = a
+            .equation
+            .as_ref()
+            .map_err(Clone::clone)
+            .and_then(|eq| match &eq.taylor_terms {
+                Ok(_) => Ok(&eq.poly),
+                Err(why) => Err(why.clone()),
+            });
+        let d = match (taylor, method) {
+            (Ok(poly), BoundMethod::Auto | BoundMethod::Taylor) => taylor_bound(self.b, &xyz_ring(), poly, pc),
             (Err(why), BoundMethod::Taylor) => {
                 return Err(self
-                    .err(
-                        span,
-                        format!("surface `{}` asks for bound = \"taylor\", but {why}", s.name),
-                    )
+                    .err(span, format!("surface `{}` asks for bound = \"taylor\", but {why}", s.name))
                     .with_label("no Taylor-root bound for this call")
-                    .with_note(
-                        "the Taylor-root bound needs a polynomial equation; use bound = \"lipschitz\" or \"auto\"",
-                    ))
+                    .with_note("the Taylor-root bound needs a polynomial equation of moderate size; use bound = \"lipschitz\" or \"auto\""))
             }
             _ => match &a.field {
                 Some(field) => lipschitz_bound(field, self.b, pc),
@@ -740,15 +743,28 @@ impl<'a> Lowerer<'a> {
                 let f = crate::algebraic::build_equation(self.b, &eq.poly, pc);
                 first_order(self.b, f)
             }
-            (_, Some(field), BoundMethod::Lipschitz) | (Err(_), Some(field), BoundMethod::Auto) => {
-                lipschitz_bound(field, self.b, pc)
+            (Ok(eq), _, BoundMethod::Auto | BoundMethod::Taylor) if eq.taylor_terms.is_ok() => {
+                taylor_bound(self.b, &xyz_ring(), &eq.poly, pc)
             }
-            (Ok(eq), _, _) => taylor_bound(self.b, &xyz_ring(), &eq.poly, pc),
+            (Ok(eq), _, BoundMethod::Taylor) => {
+                let why = eq.taylor_terms.clone().err().unwrap_or_default();
+                return Err(self
+                    .err(
+                        span,
+                        format!("surface `{}` asks for bound = \"taylor\", but {why}", s.name),
+                    )
+                    .with_label("no Taylor-root bound for this call"));
+            }
+            (Ok(_), Some(field), _) => lipschitz_bound(field, self.b, pc),
+            (Ok(eq), None, _) => {
+                let f = crate::algebraic::build_equation(self.b, &eq.poly, pc);
+                first_order(self.b, f)
+            }
             (Err(why), _, _) => {
                 return Err(self
                     .err(span, format!("surface `{}` cannot be sphere-traced: {why}", s.name))
                     .with_label("no implicit equation")
-                    .with_note("only rational parametrizations can be implicitized; others will be tessellated by the mesh pipeline"))
+                    .with_note("only rational parametrizations can be implicitized; others will be tessellated by the mesh pipeline"));
             }
         };
         if let (true, Some(coords)) = (s.options.image_only, a.parametrization.as_ref()) {

@@ -17,7 +17,7 @@ use isoray_algebra::parse::to_rational;
 use isoray_algebra::{implicitize_groebner, Budget, GroebnerOptions, MonomialOrder, Poly, Rat, RatFunc, Ring};
 use num_traits::One;
 
-use crate::algebraic::{eval_with_scale, squarefree_part, taylor_size, xyz_ring};
+use crate::algebraic::{dense_terms, eval_with_scale, squarefree_part, taylor_size, xyz_ring};
 use crate::diag::{Diagnostic, SourceId};
 use crate::ir::{Builder, Node};
 use crate::lipschitz::Field;
@@ -102,8 +102,9 @@ pub struct Equation {
     pub reduced: bool,
     /// True when the equation was a rational function and its numerator is traced.
     pub numerator: bool,
-    /// How many Taylor coefficient polynomials the bound evaluates.
-    pub taylor_terms: usize,
+    /// How many Taylor coefficient polynomials the Taylor-root bound
+    /// evaluates, or why that bound is not used for this equation.
+    pub taylor_terms: Result<usize, String>,
 }
 
 /// How a parametric surface was implicitized and checked.
@@ -137,6 +138,10 @@ pub struct Analysis {
 /// The highest degree traced by the Taylor-root bound (its size grows as n³).
 pub const MAX_TAYLOR_DEGREE: i64 = 16;
 
+/// The most terms, over all Taylor coefficient polynomials, that the
+/// Taylor-root bound evaluates; larger equations use the Lipschitz bound.
+pub const MAX_TAYLOR_TERMS: usize = 20_000;
+
 /// Relative residual above which an implicit equation fails its check.
 pub const VERIFY_TOLERANCE: f64 = 1e-7;
 
@@ -164,17 +169,32 @@ fn equation_from(
 ) -> Result<Equation, String> {
     let ring = xyz_ring();
     let original_degree = poly.degree();
-    if original_degree > MAX_TAYLOR_DEGREE {
-        return Err(format!(
-            "its degree {original_degree} is above {MAX_TAYLOR_DEGREE}, the largest traced by the Taylor-root bound"
-        ));
-    }
     let t = Instant::now();
     let sf = squarefree_part(&ring, &poly, SQUAREFREE_TIME);
     timings.push(("square-free part", t.elapsed()));
-    let t = Instant::now();
-    let taylor_terms = taylor_size(&ring, &sf.poly);
-    timings.push(("Taylor coefficients", t.elapsed()));
+    let degree = sf.poly.degree();
+    let taylor_terms = if degree > MAX_TAYLOR_DEGREE {
+        Err(format!(
+            "its degree {degree} is above {MAX_TAYLOR_DEGREE}, the largest traced by the Taylor-root bound"
+        ))
+    } else if sf.poly.len() * dense_terms(degree) > 4 * MAX_TAYLOR_TERMS {
+        // A quick upper bound on the expansion's size (terms × derivatives).
+        Err(format!(
+            "its {} terms of degree {degree} make a Taylor expansion too costly to evaluate at every step",
+            sf.poly.len()
+        ))
+    } else {
+        let t = Instant::now();
+        let (polys, total_terms) = taylor_size(&ring, &sf.poly);
+        timings.push(("Taylor coefficients", t.elapsed()));
+        if total_terms > MAX_TAYLOR_TERMS {
+            Err(format!(
+                "its Taylor expansion has {total_terms} terms, more than {MAX_TAYLOR_TERMS} (too costly to evaluate at every step)"
+            ))
+        } else {
+            Ok(polys)
+        }
+    };
     Ok(Equation {
         poly: sf.poly,
         original_degree,
@@ -593,13 +613,15 @@ pub fn describe(name: &str, s: &Surface, a: &Analysis) -> String {
             }
             out.push('\n');
             let factor = s.options.lipschitz_factor;
-            let bound = match s.options.bound {
-                BoundMethod::FirstOrder => "first-order estimate f / |grad f| (exact symbolic gradient)".to_string(),
-                BoundMethod::Lipschitz => LIPSCHITZ_TEXT.to_string(),
-                _ => format!(
-                    "Taylor-root bound: smallest root of |f(p)| = sum_k M_k d^k, {} Taylor coefficient polynomials",
-                    eq.taylor_terms
+            let bound = match (s.options.bound, &eq.taylor_terms) {
+                (BoundMethod::FirstOrder, _) => {
+                    "first-order estimate f / |grad f| (exact symbolic gradient)".to_string()
+                }
+                (BoundMethod::Lipschitz, _) => LIPSCHITZ_TEXT.to_string(),
+                (_, Ok(n)) => format!(
+                    "Taylor-root bound: smallest root of |f(p)| = sum_k M_k d^k, {n} Taylor coefficient polynomials"
                 ),
+                (_, Err(why)) => format!("{LIPSCHITZ_TEXT} (no Taylor-root bound: {why})"),
             };
             out.push_str(&format!("bound:     {bound}"));
             if factor != 1.0 {
