@@ -181,8 +181,17 @@ impl<'t, T: Num> PointEvaluator<'t, T> {
         s[0] = x;
         s[1] = y;
         s[2] = z;
-        for ins in self.tape.instrs() {
+        let instrs = self.tape.instrs();
+        let mut k = 0;
+        while k < instrs.len() {
+            let ins = &instrs[k];
+            k += 1;
             match *ins {
+                Instr::Skip { c, len } => {
+                    if s[c as usize].value() > 0.0 {
+                        k += len as usize;
+                    }
+                }
                 Instr::Unary { op, out, a } => s[out as usize] = T::unary(op, s[a as usize]),
                 Instr::Binary { op, out, a, b } => s[out as usize] = T::binary(op, s[a as usize], s[b as usize]),
                 Instr::Select { out, c, a, b } => {
@@ -334,7 +343,11 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
         debug_assert!(m <= LANES);
         let base = self.slots.as_mut_ptr();
         let len = self.slots.len();
-        for ins in self.tape.instrs() {
+        let instrs = self.tape.instrs();
+        let mut k = 0;
+        while k < instrs.len() {
+            let ins = &instrs[k];
+            k += 1;
             // SAFETY: every slot index is below `tape.slots()` (checked below in
             // debug builds, guaranteed by `Tape::extract`), so each block of LANES
             // elements lies inside `slots`; and no instruction writes a slot it
@@ -362,6 +375,11 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
                         let (o, c, a, b) = (blk_mut(out), blk(c), blk(a), blk(b));
                         for l in 0..m {
                             o[l] = if c[l] > T::default() { a[l] } else { b[l] };
+                        }
+                    }
+                    Instr::Skip { c, len } => {
+                        if blk(c)[..m].iter().all(|&v| v > T::default()) {
+                            k += len as usize;
                         }
                     }
                 }

@@ -214,6 +214,8 @@ pub fn eval_interval(tape: &Tape, x: Interval, y: Interval, z: Interval) -> Inte
     }
     for ins in tape.instrs() {
         match *ins {
+            // Lazy regions are evaluated: their select takes the hull where c may be ≤ 0.
+            Instr::Skip { .. } => {}
             Instr::Unary { op, out, a } => s[out as usize] = Interval::unary(op, s[a as usize]),
             Instr::Binary { op, out, a, b } => s[out as usize] = Interval::binary(op, s[a as usize], s[b as usize]),
             Instr::Select { out, c, a, b } => {

@@ -169,6 +169,8 @@ pub fn apply_binary<T: num_traits::Float>(op: BinOp, a: T, b: T) -> T {
 pub struct Builder {
     ops: Vec<Op>,
     dedup: HashMap<Key, Node>,
+    /// Selects whose `b` operand may be skipped (see [`Builder::lazy_select`]).
+    lazy: std::collections::HashSet<Node>,
 }
 
 impl Builder {
@@ -337,6 +339,19 @@ impl Builder {
             return a;
         }
         self.intern(Op::Select(c, a, b))
+    }
+
+    /// `if c > 0 { a } else { b }` where `b` is expensive and `a` cheap: the
+    /// tape computes `b` only where some point needs it. In a tape, the nodes
+    /// that only `b` uses are placed after a [`Instr::Skip`] that jumps over
+    /// them when `c > 0` at every point being evaluated (a bounding volume:
+    /// `c` is the distance to it minus a margin, `a` the distance to it).
+    pub fn lazy_select(&mut self, c: Node, a: Node, b: Node) -> Node {
+        let n = self.select(c, a, b);
+        if matches!(self.op(n), Op::Select(..)) {
+            self.lazy.insert(n);
+        }
+        n
     }
 
     /// Shorthands.
@@ -554,7 +569,7 @@ impl Builder {
 
     /// Extracts the nodes that `output` depends on as an evaluation tape.
     pub fn tape(&self, output: Node) -> Tape {
-        Tape::extract(&self.ops, output)
+        Tape::extract(&self.ops, &self.lazy, output)
     }
 }
 
@@ -592,6 +607,16 @@ pub enum Instr {
         /// slot taken otherwise
         b: u32,
     },
+    /// Skip the next `len` instructions when `c > 0` at every point being
+    /// evaluated. They compute the `b` operand of the lazy select that
+    /// follows them, which then takes `a` everywhere; nothing else reads
+    /// their slots. Evaluators may also ignore it and run them.
+    Skip {
+        /// condition slot
+        c: u32,
+        /// instructions to skip
+        len: u32,
+    },
 }
 
 /// A linear program computing one scalar from (x, y, z).
@@ -608,47 +633,103 @@ pub struct Tape {
 }
 
 impl Tape {
-    fn extract(ops: &[Op], output: Node) -> Tape {
+    fn extract(ops: &[Op], lazy: &std::collections::HashSet<Node>, output: Node) -> Tape {
         let n = output.0 as usize + 1;
-        // Liveness: which nodes the output needs, and the last instruction using each.
+        let operands = |i: usize| -> Vec<Node> {
+            match ops[i] {
+                Op::Unary(_, a) => vec![a],
+                Op::Binary(_, a, b) => vec![a, b],
+                Op::Select(c, a, b) => vec![c, a, b],
+                _ => Vec::new(),
+            }
+        };
+        // Which nodes the output needs, and which it needs without going
+        // through the `b` of a lazy select ("eager": always computed).
         let mut needed = vec![false; n];
+        let mut eager = vec![false; n];
         needed[output.0 as usize] = true;
+        eager[output.0 as usize] = true;
         for i in (0..n).rev() {
             if !needed[i] {
                 continue;
             }
-            match ops[i] {
-                Op::Unary(_, a) => needed[a.0 as usize] = true,
-                Op::Binary(_, a, b) => {
-                    needed[a.0 as usize] = true;
-                    needed[b.0 as usize] = true;
+            let ops_i = operands(i);
+            let is_lazy = lazy.contains(&Node(i as u32));
+            for (k, m) in ops_i.iter().enumerate() {
+                needed[m.0 as usize] = true;
+                if eager[i] && !(is_lazy && k == 2) {
+                    eager[m.0 as usize] = true;
                 }
-                Op::Select(c, a, b) => {
-                    needed[c.0 as usize] = true;
-                    needed[a.0 as usize] = true;
-                    needed[b.0 as usize] = true;
-                }
-                _ => {}
             }
         }
-        let mut last_use = vec![0usize; n];
+        // The region of an eager lazy select: the non-eager nodes its `b`
+        // reaches. A node in two regions is placed in neither (made eager).
+        let mut region_of = vec![u32::MAX; n];
+        let roots: Vec<usize> = (0..n)
+            .filter(|&i| needed[i] && eager[i] && lazy.contains(&Node(i as u32)))
+            .collect();
+        for &r in &roots {
+            let Op::Select(_, _, b) = ops[r] else { continue };
+            let mut stack = vec![b.0 as usize];
+            let mut seen = std::collections::HashSet::new();
+            while let Some(m) = stack.pop() {
+                if eager[m] || !seen.insert(m) {
+                    continue;
+                }
+                region_of[m] = if region_of[m] == u32::MAX {
+                    r as u32
+                } else {
+                    u32::MAX - 1
+                };
+                stack.extend(operands(m).iter().map(|x| x.0 as usize));
+            }
+        }
+        // Nodes shared by two regions become eager, with everything they use.
+        for i in (0..n).rev() {
+            if region_of[i] == u32::MAX - 1 {
+                eager[i] = true;
+            }
+            if eager[i] && needed[i] {
+                region_of[i] = u32::MAX;
+                let is_lazy = lazy.contains(&Node(i as u32));
+                for (k, m) in operands(i).into_iter().enumerate() {
+                    if is_lazy && k == 2 {
+                        continue;
+                    }
+                    if !eager[m.0 as usize] {
+                        eager[m.0 as usize] = true;
+                        region_of[m.0 as usize] = u32::MAX;
+                    }
+                }
+            }
+        }
+        // Emission order: eager nodes by index; before each region root, its region.
+        let mut order: Vec<usize> = Vec::new();
+        let mut skip_before: Vec<(usize, usize)> = Vec::new(); // (position of the skip, region root)
+        let members: Vec<Vec<usize>> = {
+            let mut m = vec![Vec::new(); n];
+            for i in 0..n {
+                if needed[i] && !eager[i] && region_of[i] < u32::MAX - 1 {
+                    m[region_of[i] as usize].push(i);
+                }
+            }
+            m
+        };
         for i in 0..n {
-            if !needed[i] {
+            if !needed[i] || !eager[i] {
                 continue;
             }
-            let mut touch = |m: Node| last_use[m.0 as usize] = i;
-            match ops[i] {
-                Op::Unary(_, a) => touch(a),
-                Op::Binary(_, a, b) => {
-                    touch(a);
-                    touch(b);
-                }
-                Op::Select(c, a, b) => {
-                    touch(c);
-                    touch(a);
-                    touch(b);
-                }
-                _ => {}
+            if roots.contains(&i) && !members[i].is_empty() {
+                skip_before.push((order.len(), i));
+                order.extend(&members[i]);
+            }
+            order.push(i);
+        }
+        // Liveness over the emission order.
+        let mut last_use = vec![0usize; n];
+        for (pos, &i) in order.iter().enumerate() {
+            for m in operands(i) {
+                last_use[m.0 as usize] = pos;
             }
         }
         last_use[output.0 as usize] = usize::MAX;
@@ -676,9 +757,30 @@ impl Tape {
         let mut instrs = Vec::new();
         let is_temp =
             |ops: &[Op], m: Node| matches!(ops[m.0 as usize], Op::Unary(..) | Op::Binary(..) | Op::Select(..));
-        for i in 0..n {
-            if !needed[i] || !is_temp(ops, Node(i as u32)) {
+        let mut skips = skip_before.iter().peekable();
+        let mut pending: Vec<(usize, usize)> = Vec::new(); // (instr index of a skip, region root)
+        for (pos, &i) in order.iter().enumerate() {
+            if let Some(&&(at, root)) = skips.peek() {
+                if at == pos {
+                    skips.next();
+                    let Op::Select(c, _, _) = ops[root] else { unreachable!() };
+                    pending.push((instrs.len(), root));
+                    instrs.push(Instr::Skip {
+                        c: slot_of[c.0 as usize],
+                        len: 0,
+                    });
+                }
+            }
+            if !is_temp(ops, Node(i as u32)) {
                 continue;
+            }
+            if let Some(k) = pending.iter().position(|&(_, root)| root == i) {
+                // The region ends here: patch its skip length.
+                let (at, _) = pending.remove(k);
+                let len = (instrs.len() - at - 1) as u32;
+                if let Instr::Skip { len: l, .. } = &mut instrs[at] {
+                    *l = len;
+                }
             }
             let out = free.pop().unwrap_or_else(|| {
                 next_slot += 1;
@@ -686,36 +788,30 @@ impl Tape {
             });
             slot_of[i] = out;
             let s = |m: Node| slot_of[m.0 as usize];
-            let (instr, operands): (Instr, Vec<Node>) = match ops[i] {
-                Op::Unary(op, a) => (Instr::Unary { op, out, a: s(a) }, vec![a]),
-                Op::Binary(op, a, b) => (
-                    Instr::Binary {
-                        op,
-                        out,
-                        a: s(a),
-                        b: s(b),
-                    },
-                    vec![a, b],
-                ),
-                Op::Select(c, a, b) => (
-                    Instr::Select {
-                        out,
-                        c: s(c),
-                        a: s(a),
-                        b: s(b),
-                    },
-                    vec![c, a, b],
-                ),
+            let instr = match ops[i] {
+                Op::Unary(op, a) => Instr::Unary { op, out, a: s(a) },
+                Op::Binary(op, a, b) => Instr::Binary {
+                    op,
+                    out,
+                    a: s(a),
+                    b: s(b),
+                },
+                Op::Select(c, a, b) => Instr::Select {
+                    out,
+                    c: s(c),
+                    a: s(a),
+                    b: s(b),
+                },
                 _ => unreachable!(),
             };
             instrs.push(instr);
             // Free operands whose last use is this instruction (after choosing `out`,
             // so that no instruction writes a slot it reads).
-            let mut operands = operands;
-            operands.sort();
-            operands.dedup();
-            for m in operands {
-                if last_use[m.0 as usize] == i && is_temp(ops, m) {
+            let mut ops_i = operands(i);
+            ops_i.sort();
+            ops_i.dedup();
+            for m in ops_i {
+                if last_use[m.0 as usize] == pos && is_temp(ops, m) {
                     free.push(slot_of[m.0 as usize]);
                 }
             }
@@ -760,6 +856,69 @@ impl Tape {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A lazy select and its eager twin, over a shared subexpression.
+    fn lazy_pair() -> (Tape, Tape) {
+        let build = |lazy: bool| {
+            let mut b = Builder::new();
+            let (x, y, z) = (b.x(), b.y(), b.z());
+            let x2 = b.square(x);
+            let y2 = b.square(y);
+            let z2 = b.square(z);
+            let r2 = b.add(x2, y2);
+            let r2 = b.add(r2, z2);
+            let r = b.sqrt(r2);
+            let far = b.add_c(r, -2.0);
+            let cheap = b.add_c(r, -1.0);
+            // An expensive field that also uses r (shared with the cheap branch).
+            let sx = b.unary(UnOp::Sin, x);
+            let sy = b.unary(UnOp::Cos, y);
+            let t = b.mul(sx, sy);
+            let t = b.mul_c(t, 0.1);
+            let e = b.add(cheap, t);
+            let out = if lazy {
+                b.lazy_select(far, cheap, e)
+            } else {
+                b.select(far, cheap, e)
+            };
+            let out = b.mul_c(out, 2.0); // something after the select
+            b.tape(out)
+        };
+        (build(true), build(false))
+    }
+
+    #[test]
+    fn lazy_select_skips_its_region_and_changes_nothing() {
+        let (lazy, eager) = lazy_pair();
+        assert!(lazy
+            .instrs()
+            .iter()
+            .any(|i| matches!(i, Instr::Skip { len, .. } if *len >= 3)));
+        assert!(!eager.instrs().iter().any(|i| matches!(i, Instr::Skip { .. })));
+        let mut pl = crate::eval::PointEvaluator::<f64>::new(&lazy);
+        let mut pe = crate::eval::PointEvaluator::<f64>::new(&eager);
+        let mut bl = crate::eval::BatchEvaluator::<f64>::new(&lazy);
+        for scale in [0.3, 1.0, 3.0, 10.0] {
+            let pts: Vec<[f64; 3]> = (0..150)
+                .map(|i| {
+                    let a = i as f64 * 0.7;
+                    [a.cos() * scale, (0.3 * a).sin() * scale, a.sin() * scale * 0.8]
+                })
+                .collect();
+            let (xs, ys, zs): (Vec<f64>, Vec<f64>, Vec<f64>) = (
+                pts.iter().map(|p| p[0]).collect(),
+                pts.iter().map(|p| p[1]).collect(),
+                pts.iter().map(|p| p[2]).collect(),
+            );
+            let mut out = vec![0.0; pts.len()];
+            bl.eval(&xs, &ys, &zs, &mut out);
+            for (k, p) in pts.iter().enumerate() {
+                let want = pe.eval(p[0], p[1], p[2]);
+                assert_eq!(pl.eval(p[0], p[1], p[2]), want, "point {p:?}");
+                assert_eq!(out[k], want, "batch {p:?}");
+            }
+        }
+    }
 
     #[test]
     fn shares_and_folds() {
@@ -849,6 +1008,7 @@ mod tests {
                 Instr::Unary { out, a, .. } => assert_ne!(out, a),
                 Instr::Binary { out, a, b, .. } => assert!(out != a && out != b),
                 Instr::Select { out, c, a, b } => assert!(out != a && out != b && out != c),
+                Instr::Skip { .. } => {}
             }
         }
     }

@@ -423,7 +423,8 @@ const NEWTON_STEPS: usize = 5;
 /// from p to the nearest image point found by Gauss–Newton from the nearest
 /// grid sample (clamped to the domain), and τ a small fraction of the image's
 /// size. Its zero set is the part of the implicit surface with a real
-/// preimage in the domain.
+/// preimage in the domain. Far outside a bounding sphere of the image the
+/// field is the distance to that sphere, and the tape skips the rest.
 pub fn image_only_field(
     b: &mut Builder,
     coords: &[RatFunc; 3],
@@ -571,7 +572,31 @@ pub fn image_only_field(
     let rho = b.sqrt(rho2);
     let gap = b.add_c(rho, -tau);
     let unsigned = b.abs(closure);
-    b.max(unsigned, gap)
+    let field = b.max(unsigned, gap);
+    // A bounding sphere of the image (from a finer sampling, with a margin):
+    // farther than half its radius outside it, the distance to the sphere is
+    // the bound, and the preimage search is skipped.
+    let fine: Vec<[f64; 3]> = domain_samples(domain, 32, 0)
+        .into_iter()
+        .chain(samples.iter().map(|s| s.0))
+        .filter_map(|st| eval_parametrization(coords, st))
+        .collect();
+    let centre: [f64; 3] = std::array::from_fn(|i| 0.5 * (lo[i] + hi[i]));
+    let radius = fine
+        .iter()
+        .map(|x| ((x[0] - centre[0]).powi(2) + (x[1] - centre[1]).powi(2) + (x[2] - centre[2]).powi(2)).sqrt())
+        .fold(0.0f64, f64::max);
+    let radius = radius * 1.2 + tau + 1e-6;
+    let mut d2 = b.constant(0.0);
+    for i in 0..3 {
+        let d = b.add_c(p[i], -centre[i]);
+        let sq = b.square(d);
+        d2 = b.add(d2, sq);
+    }
+    let dist = b.sqrt(d2);
+    let outside = b.add_c(dist, -radius);
+    let far = b.add_c(outside, -0.5 * radius);
+    b.lazy_select(far, outside, field)
 }
 
 const LIPSCHITZ_TEXT: &str =
