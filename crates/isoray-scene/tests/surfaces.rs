@@ -130,6 +130,21 @@ fn torus_quartic_bound_never_exceeds_the_distance() {
         }
     }
     assert!(near > 10);
+    // f/|∇f| is the distance to first order: near the surface the ratio tends to 1.
+    let fo = scene(
+        "[surface.torus4]\nparams = { R = 1.0, r = 0.25 }\nimplicit = \"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + z^2)\"\nbound = \"first-order\"\n[[object]]\nshape = \"torus4(p)\"\n",
+    );
+    let mut checked = 0;
+    for p in samples().into_iter().map(|p| [p[0] * 0.8, p[1] * 0.5, p[2] * 0.8]) {
+        let q = ((p[0] * p[0] + p[2] * p[2]).sqrt() - 1.0).hypot(p[1]);
+        let d = q - 0.25;
+        if d.abs() < 0.02 && d.abs() > 1e-6 {
+            checked += 1;
+            let v = fo.distance(p);
+            assert!((v / d - 1.0).abs() < 0.1, "at {p:?}: f/|grad f| = {v}, distance {d}");
+        }
+    }
+    assert!(checked > 5, "{checked}");
 }
 
 #[test]
