@@ -28,6 +28,7 @@
 
 pub mod bounds;
 pub mod camera;
+pub mod optics;
 pub mod output;
 pub mod shade;
 pub mod trace;

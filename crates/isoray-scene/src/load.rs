@@ -277,6 +277,28 @@ impl<'a> Reader<'a> {
         Ok(self.vec3_opt(key)?.unwrap_or(default))
     }
 
+    /// A number or colour with every component in [0, 1] (a number is grey).
+    fn unit_color(&mut self, key: &str, default: Vec3) -> Result<Vec3> {
+        let Some(v) = self.get(key) else {
+            return Ok(default);
+        };
+        let ok = |x: f64| x.is_finite() && (0.0..=1.0).contains(&x);
+        match &v.item {
+            Item::Num(x, _) if ok(*x) => Ok([*x; 3]),
+            Item::Array(items) if items.len() == 3 => {
+                let mut out = [0.0; 3];
+                for (o, it) in out.iter_mut().zip(items) {
+                    match it.item {
+                        Item::Num(x, _) if ok(x) => *o = x,
+                        _ => return Err(self.err(it, key, "a number from 0 to 1 in the colour")),
+                    }
+                }
+                Ok(out)
+            }
+            _ => Err(self.err(v, key, "a number from 0 to 1, or a colour [r, g, b] of such numbers")),
+        }
+    }
+
     fn color(&mut self, key: &str, default: Vec3) -> Result<Vec3> {
         let c = self.vec3(key, default)?;
         if c.iter().any(|x| *x < 0.0) {
@@ -496,6 +518,13 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     ],
                     d.view,
                 )?,
+                max_depth: r.int("max_depth", d.max_depth, 0, 64)?,
+                min_weight: r.num_in(
+                    "min_weight",
+                    d.min_weight,
+                    |x| (0.0..1.0).contains(&x),
+                    "a number from 0 to below 1",
+                )?,
             };
             r.finish(RENDER_KEYS)?;
             s
@@ -603,16 +632,23 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     &[("pow", SpecularFunction::Pow), ("schlick", SpecularFunction::Schlick)],
                     d.specular_function,
                 )?,
+                reflectivity: r.unit_color("reflectivity", d.reflectivity)?,
+                transparency: r.num_in(
+                    "transparency",
+                    d.transparency,
+                    |x| (0.0..=1.0).contains(&x),
+                    "a number from 0 to 1",
+                )?,
+                ior: r.num_in(
+                    "ior",
+                    d.ior,
+                    |x| x.is_finite() && (1.0..=10.0).contains(&x),
+                    "an index of refraction from 1 to 10",
+                )?,
+                absorption: r.color("absorption", d.absorption)?,
+                fresnel: fresnel_setting(&mut r, d.fresnel)?,
             };
-            r.finish(&[
-                "ambient",
-                "diffuse",
-                "specular",
-                "shininess",
-                "emission",
-                "model",
-                "specular_function",
-            ])?;
+            r.finish(MATERIAL_KEYS)?;
             if let Some(slot) = materials.iter_mut().find(|x| x.name == m.name) {
                 *slot = m;
             } else {
@@ -873,6 +909,13 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         acc = smooth_union(&mut builder, acc, n, render.blend);
     }
     let shape = Shape::from_tape(builder.tape(acc));
+    // The unsigned distance to the nearest object surface, for rays inside objects.
+    let mut u = builder.abs(nodes[0]);
+    for &n in &nodes[1..] {
+        let a = builder.abs(n);
+        u = builder.min(u, a);
+    }
+    let surfaces = Shape::from_tape(builder.tape(u));
     Ok(Scene {
         camera,
         render,
@@ -881,9 +924,38 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         objects,
         params,
         shape,
+        surfaces,
         library: lib,
         param_ranges,
     })
+}
+
+/// All keys of a `[material.NAME]` table.
+pub const MATERIAL_KEYS: &[&str] = &[
+    "ambient",
+    "diffuse",
+    "specular",
+    "shininess",
+    "emission",
+    "model",
+    "specular_function",
+    "reflectivity",
+    "transparency",
+    "ior",
+    "absorption",
+    "fresnel",
+    "fresnel_model",
+];
+
+/// `fresnel = true | false` and `fresnel_model = "schlick" | "exact"`.
+fn fresnel_setting(r: &mut Reader, default: Fresnel) -> Result<Fresnel> {
+    let on = r.boolean("fresnel", default != Fresnel::Off)?;
+    let model = r.choice(
+        "fresnel_model",
+        &[("schlick", Fresnel::Schlick), ("exact", Fresnel::Exact)],
+        Fresnel::Schlick,
+    )?;
+    Ok(if on { model } else { Fresnel::Off })
 }
 
 /// All keys of a `[surface.NAME]` table.
@@ -1014,6 +1086,8 @@ pub const RENDER_KEYS: &[&str] = &[
     "blend",
     "material_blend",
     "view",
+    "max_depth",
+    "min_weight",
 ];
 
 /// min(a,b) − max(k−|a−b|,0)²/(4k), or min(a, b) when k = 0.

@@ -112,6 +112,10 @@ pub struct RenderSettings {
     pub material_blend: f64,
     /// What the image shows (default shaded).
     pub view: View,
+    /// Bounces of reflected and refracted rays after the primary hit (default 5).
+    pub max_depth: u32,
+    /// Secondary rays whose weight (largest channel) falls below this stop (default 0.001).
+    pub min_weight: f64,
 }
 
 impl Default for RenderSettings {
@@ -139,6 +143,8 @@ impl Default for RenderSettings {
             background: [0.95, 0.95, 0.95],
             blend: 0.0,
             material_blend: 0.3,
+            max_depth: 5,
+            min_weight: 1e-3,
             view: View::Shaded,
         }
     }
@@ -211,9 +217,35 @@ pub struct Material {
     pub model: ShadingModel,
     /// Pow or Schlick (default pow).
     pub specular_function: SpecularFunction,
+    /// Mirror reflectance per channel, 0..1 (default 0: none).
+    pub reflectivity: Vec3,
+    /// Fraction of the light not reflected that is transmitted, 0..1 (default 0: opaque).
+    pub transparency: f64,
+    /// Index of refraction (default 1.5).
+    pub ior: f64,
+    /// Beer–Lambert absorption per unit distance inside, per channel (default 0).
+    pub absorption: Vec3,
+    /// Fresnel weighting of reflection against refraction (default: on, Schlick).
+    pub fresnel: Fresnel,
+}
+
+/// How reflection and refraction are weighted at a surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Fresnel {
+    /// No Fresnel term: `reflectivity` and `transparency` as given.
+    Off,
+    /// Schlick's approximation R₀ + (1 − R₀)(1 − cos θ)⁵.
+    Schlick,
+    /// The exact Fresnel equations for an unpolarised dielectric interface.
+    Exact,
 }
 
 impl Material {
+    /// True when rays leave this material's surface (reflection or refraction).
+    pub fn is_optical(&self) -> bool {
+        self.reflectivity.iter().any(|&r| r > 0.0) || self.transparency > 0.0
+    }
+
     /// The material of objects that name none.
     pub fn default_named(name: &str) -> Material {
         Material {
@@ -225,6 +257,11 @@ impl Material {
             emission: [0.0; 3],
             model: ShadingModel::BlinnPhong,
             specular_function: SpecularFunction::Pow,
+            reflectivity: [0.0; 3],
+            transparency: 0.0,
+            ior: 1.5,
+            absorption: [0.0; 3],
+            fresnel: Fresnel::Schlick,
         }
     }
 }
@@ -259,6 +296,9 @@ pub struct Scene {
     pub params: Vec<(String, Value)>,
     /// The whole scene's distance: the union (or smooth union) of the objects.
     pub shape: Shape,
+    /// The unsigned distance to the nearest object surface, min over objects
+    /// of |dᵢ|: what rays travelling inside objects (refraction) trace.
+    pub surfaces: Shape,
     /// The scene's parameters and user surfaces, with their cached analyses.
     pub library: Library,
     /// Ranges declared for number parameters (for sliders), in file order.
