@@ -32,6 +32,7 @@ pub mod optics;
 pub mod output;
 pub mod shade;
 pub mod trace;
+mod whitted;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -200,6 +201,8 @@ impl<'s> Ctx<'s> {
 /// Per-thread state: evaluators and scratch buffers.
 struct Worker<'s> {
     scene_eval: BatchEvaluator<'s, f32>,
+    /// The unsigned distance to the nearest surface, for rays inside objects.
+    surf_eval: BatchEvaluator<'s, f32>,
     object_evals: Vec<BatchEvaluator<'s, f32>>,
     scratch: Scratch,
     rays: Rays,
@@ -232,6 +235,7 @@ impl<'s> Worker<'s> {
         };
         Worker {
             scene_eval: BatchEvaluator::new(ctx.scene.shape.tape()),
+            surf_eval: BatchEvaluator::new(ctx.scene.surfaces.tape()),
             object_evals,
             scratch: Scratch::default(),
             rays: Rays::default(),
@@ -239,10 +243,16 @@ impl<'s> Worker<'s> {
         }
     }
 
-    /// Traces `self.rays` and computes hit positions and normals.
-    fn trace_and_normals(&mut self, ctx: &Ctx) -> (HitSet, u64) {
+    /// Traces `self.rays` and computes hit positions and normals. Rays
+    /// `inside` objects trace the unsigned distance to the nearest surface.
+    fn trace_and_normals(&mut self, ctx: &Ctx, inside: bool) -> (HitSet, u64) {
         let s = &ctx.scene.render;
-        let mut evals = sphere_trace(&mut self.scene_eval, &self.rays, s, &mut self.scratch, &mut self.hits);
+        let ev = if inside {
+            &mut self.surf_eval
+        } else {
+            &mut self.scene_eval
+        };
+        let mut evals = sphere_trace(ev, &self.rays, s, &mut self.scratch, &mut self.hits);
         let mut hs = HitSet::default();
         for (i, h) in self.hits.iter().enumerate() {
             if h.t.is_finite() {
@@ -256,9 +266,16 @@ impl<'s> Worker<'s> {
         hs.nx.resize(m, 0.0);
         hs.ny.resize(m, 0.0);
         hs.nz.resize(m, 0.0);
-        self.scene_eval
-            .gradients(&hs.px, &hs.py, &hs.pz, ctx.gradient, &mut hs.nx, &mut hs.ny, &mut hs.nz);
-        evals += m as u64 * gradient_cost(ctx.gradient);
+        // Inside, the field is unsigned (|d|): finite differences across the
+        // surface cancel, so normals there come from dual numbers, exact at
+        // any distance from the surface.
+        let (ev, mode) = if inside {
+            (&mut self.surf_eval, GradientMode::Dual)
+        } else {
+            (&mut self.scene_eval, ctx.gradient)
+        };
+        ev.gradients(&hs.px, &hs.py, &hs.pz, mode, &mut hs.nx, &mut hs.ny, &mut hs.nz);
+        evals += m as u64 * gradient_cost(mode);
         for k in 0..m {
             let n = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]).normalize_or_zero();
             let i = hs.idx[k];
@@ -298,7 +315,7 @@ impl<'s> Worker<'s> {
                 }
             }
         }
-        let (hs, mut evals) = self.trace_and_normals(ctx);
+        let (hs, mut evals) = self.trace_and_normals(ctx, false);
         let mut samples = vec![Vec3::from(s.background.map(|c| c as f32)); self.rays.len()];
         match s.view {
             View::Steps => {
@@ -311,7 +328,7 @@ impl<'s> Worker<'s> {
                     samples[i] = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]) * 0.5 + 0.5;
                 }
             }
-            View::Shaded => evals += self.shade(ctx, &hs, &mut samples),
+            View::Shaded => evals += self.trace_paths(ctx, hs, &mut samples),
         }
         let spp = (aa * aa) as usize;
         let inv = 1.0 / spp as f32;
@@ -329,7 +346,7 @@ impl<'s> Worker<'s> {
                     self.rays.push(origin, d.as_vec3().to_array());
                 }
             }
-            let (hs, e) = self.trace_and_normals(ctx);
+            let (hs, e) = self.trace_and_normals(ctx, false);
             evals += e;
             depth = self.hits.iter().map(|h| h.t).collect();
             normals = vec![[0.0; 3]; self.rays.len()];
@@ -351,21 +368,22 @@ impl<'s> Worker<'s> {
         }
     }
 
-    /// Shades the hit samples. Returns evaluations spent.
-    fn shade(&mut self, ctx: &Ctx, hs: &HitSet, samples: &mut [Vec3]) -> u64 {
+    /// Local shading of the hits of `self.rays`: emission, ambient (with
+    /// occlusion) and direct light, the ambient and diffuse parts weighted by
+    /// `local` (what the Fresnel split leaves to local shading). Adds the
+    /// evaluations spent to `evals`.
+    fn shade(&mut self, ctx: &Ctx, hs: &HitSet, surfaces: &[Surface], local: &[Vec3], evals: &mut u64) -> Vec<Vec3> {
         let scene = ctx.scene;
         let s = &scene.render;
         let m = hs.idx.len();
         if m == 0 {
-            return 0;
+            return Vec::new();
         }
-        let mut evals = 0u64;
-        let surfaces = self.materials(ctx, hs, &mut evals);
-        let ao = self.ambient_occlusion(s, hs, &mut evals);
+        let ao = self.ambient_occlusion(s, hs, evals);
         let pos = |k: usize| Vec3::new(hs.px[k], hs.py[k], hs.pz[k]);
         let nrm = |k: usize| Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]);
         let mut color: Vec<Vec3> = (0..m)
-            .map(|k| surfaces[k].emission + surfaces[k].ambient * ao[k])
+            .map(|k| surfaces[k].emission + local[k] * surfaces[k].ambient * ao[k])
             .collect();
 
         let mut shadow_rays = Rays::default();
@@ -403,7 +421,7 @@ impl<'s> Worker<'s> {
                     tmax.push(dist.min(s.shadow_max_distance as f32));
                 }
             }
-            evals += shadow_march(
+            *evals += shadow_march(
                 &mut self.scene_eval,
                 &shadow_rays,
                 &tmax,
@@ -420,25 +438,28 @@ impl<'s> Worker<'s> {
                 if s.shadows != ShadowMode::None && s.shadow_exponent != 1.0 {
                     sh = sh.powf(s.shadow_exponent as f32);
                 }
-                color[k] += radiance * atten[k] * sh * shade::direct(&surfaces[k], nrm(k), v, dirs[k]);
+                let (diffuse, specular) = shade::direct_parts(&surfaces[k], nrm(k), v, dirs[k]);
+                color[k] += radiance * atten[k] * sh * (local[k] * diffuse + specular);
             }
         }
-        for (k, &i) in hs.idx.iter().enumerate() {
-            samples[i] = color[k];
-        }
-        evals
+        color
     }
 
-    /// The material at each hit: the closest object's, or with `blend` > 0 a
-    /// mix following the smooth union's blend factor.
-    fn materials(&mut self, ctx: &Ctx, hs: &HitSet, evals: &mut u64) -> Vec<Surface> {
+    /// The material at each hit and the object it belongs to: the closest
+    /// object's, or with `blend` > 0 a mix following the smooth union's blend
+    /// factor (the object is then the closest one). For hits of rays inside
+    /// objects (`unsigned`), the object whose surface is nearest, unblended.
+    fn materials(&mut self, ctx: &Ctx, hs: &HitSet, evals: &mut u64, unsigned: bool) -> (Vec<Surface>, Vec<usize>) {
         let m = hs.idx.len();
         if self.object_evals.is_empty() {
-            return vec![ctx.surfaces[0]; m];
+            return (vec![ctx.surfaces[0]; m], vec![0; m]);
         }
-        let k = ctx.scene.render.blend as f32;
+        let k = if unsigned { 0.0 } else { ctx.scene.render.blend as f32 };
         let km = k * ctx.scene.render.material_blend as f32;
+        let key = |d: f32| if unsigned { d.abs() } else { d };
         let mut acc_d = vec![0.0f32; m];
+        let mut best = vec![0.0f32; m];
+        let mut obj = vec![0usize; m];
         let mut d = vec![0.0f32; m];
         let mut out = vec![ctx.surfaces[0]; m];
         for (j, ev) in self.object_evals.iter_mut().enumerate() {
@@ -446,22 +467,29 @@ impl<'s> Worker<'s> {
             ev.eval(&hs.px, &hs.py, &hs.pz, target);
             *evals += m as u64;
             if j == 0 {
+                for q in 0..m {
+                    best[q] = key(acc_d[q]);
+                }
                 continue;
             }
             for q in 0..m {
                 let (a, b) = (acc_d[q], d[q]);
+                if key(b) < best[q] {
+                    best[q] = key(b);
+                    obj[q] = j;
+                }
                 if k > 0.0 {
                     let h = (0.5 + 0.5 * (a - b) / km).clamp(0.0, 1.0);
                     out[q] = out[q].mix(&ctx.surfaces[j], h);
                     let hh = (k - (a - b).abs()).max(0.0);
                     acc_d[q] = a.min(b) - hh * hh * 0.25 / k;
-                } else if b < a {
+                } else if obj[q] == j {
                     out[q] = ctx.surfaces[j];
                     acc_d[q] = b;
                 }
             }
         }
-        out
+        (out, obj)
     }
 
     /// Ambient occlusion by sampling the distance along the normal:

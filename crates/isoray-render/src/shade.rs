@@ -1,7 +1,7 @@
 //! Local illumination: Phong and Blinn-Phong with ambient occlusion and shadows.
 
 use glam::Vec3;
-use isoray_scene::{Material, ShadingModel, SpecularFunction};
+use isoray_scene::{Fresnel, Material, ShadingModel, SpecularFunction};
 
 /// A material in f32, possibly blended from several objects' materials.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -20,6 +20,16 @@ pub struct Surface {
     pub model: ShadingModel,
     /// Pow or Schlick.
     pub specular_function: SpecularFunction,
+    /// Mirror reflectance.
+    pub reflectivity: Vec3,
+    /// Transmitted fraction of the light not reflected.
+    pub transparency: f32,
+    /// Index of refraction.
+    pub ior: f32,
+    /// Beer–Lambert absorption per unit distance inside.
+    pub absorption: Vec3,
+    /// Fresnel weighting.
+    pub fresnel: Fresnel,
 }
 
 fn v3(a: [f64; 3]) -> Vec3 {
@@ -36,6 +46,11 @@ impl From<&Material> for Surface {
             emission: v3(m.emission),
             model: m.model,
             specular_function: m.specular_function,
+            reflectivity: v3(m.reflectivity),
+            transparency: m.transparency as f32,
+            ior: m.ior as f32,
+            absorption: v3(m.absorption),
+            fresnel: m.fresnel,
         }
     }
 }
@@ -55,7 +70,17 @@ impl Surface {
             } else {
                 other.specular_function
             },
+            reflectivity: self.reflectivity.lerp(other.reflectivity, h),
+            transparency: self.transparency + (other.transparency - self.transparency) * h,
+            ior: self.ior + (other.ior - self.ior) * h,
+            absorption: self.absorption.lerp(other.absorption, h),
+            fresnel: if h < 0.5 { self.fresnel } else { other.fresnel },
         }
+    }
+
+    /// True when rays leave this surface (reflection or refraction).
+    pub fn is_optical(&self) -> bool {
+        self.reflectivity.max_element() > 0.0 || self.transparency > 0.0
     }
 }
 
@@ -72,9 +97,15 @@ pub fn specular_factor(f: SpecularFunction, c: f32, n: f32) -> f32 {
 /// Diffuse plus specular from one light arriving from unit direction `l`,
 /// seen from unit direction `v` (towards the eye), at unit normal `n`.
 pub fn direct(s: &Surface, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
+    let (d, sp) = direct_parts(s, n, v, l);
+    d + sp
+}
+
+/// The diffuse and the specular parts of [`direct`].
+pub fn direct_parts(s: &Surface, n: Vec3, v: Vec3, l: Vec3) -> (Vec3, Vec3) {
     let ndl = n.dot(l);
     if ndl <= 0.0 {
-        return Vec3::ZERO;
+        return (Vec3::ZERO, Vec3::ZERO);
     }
     let c = match s.model {
         ShadingModel::Phong => {
@@ -83,7 +114,10 @@ pub fn direct(s: &Surface, n: Vec3, v: Vec3, l: Vec3) -> Vec3 {
         }
         ShadingModel::BlinnPhong => n.dot((l + v).normalize_or_zero()),
     };
-    s.diffuse * ndl + s.specular * specular_factor(s.specular_function, c, s.shininess)
+    (
+        s.diffuse * ndl,
+        s.specular * specular_factor(s.specular_function, c, s.shininess),
+    )
 }
 
 #[cfg(test)]
@@ -99,6 +133,11 @@ mod tests {
             emission: Vec3::ZERO,
             model,
             specular_function: SpecularFunction::Pow,
+            reflectivity: Vec3::ZERO,
+            transparency: 0.0,
+            ior: 1.5,
+            absorption: Vec3::ZERO,
+            fresnel: Fresnel::Schlick,
         }
     }
 
