@@ -1,0 +1,230 @@
+//! Known-answer tests of the recursive ray tracer: a mirror sphere reflects a
+//! checker plane where the analytic reflected ray says, and a glass sphere
+//! refracts a stripe where Snell's law at both surfaces says (inverting it).
+
+use glam::DVec3;
+use isoray_render::camera::RayCamera;
+use isoray_render::{render, RenderOptions};
+use isoray_scene::load_str;
+
+const W: u32 = 64;
+const H: u32 = 48;
+
+/// Ray–sphere: the entry and exit distances.
+fn sphere_hits(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Option<(f64, f64)> {
+    let oc = o - c;
+    let b = oc.dot(d);
+    let disc = b * b - (oc.length_squared() - r * r);
+    (disc > 0.0).then(|| (-b - disc.sqrt(), -b + disc.sqrt()))
+}
+
+fn snell(i: DVec3, n: DVec3, eta: f64) -> DVec3 {
+    let cos1 = -n.dot(i);
+    let k = 1.0 - eta * eta * (1.0 - cos1 * cos1);
+    assert!(k >= 0.0, "no total internal reflection through a sphere");
+    eta * i + (eta * cos1 - k.sqrt()) * n
+}
+
+const CHECKER: &str = r#"
+[camera]
+position = [0.0, 1.6, 4.0]
+target = [0.0, 0.7, 0.0]
+fov = 40.0
+[render]
+width = 64
+height = 48
+shadows = "none"
+ao = false
+background = [0.5, 0.5, 0.5]
+[[light]]
+intensity = 0.0
+[material.white]
+emission = [1.0, 1.0, 1.0]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+[material.black]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+[material.mirror]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+reflectivity = 1.0
+fresnel = false
+[[object]]
+material = "white"
+shape = "min(box(repeat(p - vec3(0.0, -0.1, 0.0), vec3(2.0, 1000.0, 2.0)), vec3(0.5, 0.1, 0.5)), box(repeat(p - vec3(1.0, -0.1, 1.0), vec3(2.0, 1000.0, 2.0)), vec3(0.5, 0.1, 0.5)))"
+[[object]]
+material = "black"
+shape = "min(box(repeat(p - vec3(1.0, -0.1, 0.0), vec3(2.0, 1000.0, 2.0)), vec3(0.5, 0.1, 0.5)), box(repeat(p - vec3(0.0, -0.1, 1.0), vec3(2.0, 1000.0, 2.0)), vec3(0.5, 0.1, 0.5)))"
+[[object]]
+material = "mirror"
+shape = "sphere(p - vec3(0.0, 0.9, 0.0), 0.8)"
+"#;
+
+#[test]
+fn mirror_sphere_reflects_the_checker_where_the_reflected_ray_lands() {
+    let scene = load_str(CHECKER, "checker.toml", &[]).unwrap();
+    let (img, stats) = render(&scene, &RenderOptions::default());
+    let cam = RayCamera::new(&scene.camera, W, H);
+    let o = cam.origin();
+    let c = DVec3::new(0.0, 0.9, 0.0);
+    let (mut white, mut black, mut sky) = (0, 0, 0);
+    for j in 0..H {
+        for i in 0..W {
+            let d = cam.direction(i as f64 + 0.5, j as f64 + 0.5);
+            let Some((t, _)) = sphere_hits(o, d, c, 0.8) else {
+                continue;
+            };
+            let p = o + d * t;
+            let n = (p - c) / 0.8;
+            if n.dot(-d) < 0.3 {
+                continue; // near the silhouette
+            }
+            let r = d - 2.0 * n.dot(d) * n;
+            let got = img.color[(j * W + i) as usize][0] as f64;
+            let want = if r.y >= -1e-9 {
+                sky += 1;
+                0.5
+            } else {
+                let q = p + r * (-p.y / r.y);
+                let (fx, fz) = (q.x + 0.5 - (q.x + 0.5).floor(), q.z + 0.5 - (q.z + 0.5).floor());
+                let edge = [fx, 1.0 - fx, fz, 1.0 - fz].into_iter().fold(1.0, f64::min);
+                // Stay clear of tile edges (a pixel's footprint grows in the reflection).
+                if edge < 0.15 || (q - p).length() > 8.0 {
+                    continue;
+                }
+                let parity = (q.x.round() as i64 + q.z.round() as i64).rem_euclid(2);
+                if parity == 0 {
+                    white += 1;
+                    1.0
+                } else {
+                    black += 1;
+                    0.0
+                }
+            };
+            assert!(
+                (got - want).abs() < 0.1,
+                "pixel ({i}, {j}): rendered {got}, reflected ray says {want}"
+            );
+        }
+    }
+    assert!(white > 20 && black > 20 && sky > 20, "{white} {black} {sky}");
+    assert!(stats.evaluations > 0);
+}
+
+const GLASS: &str = r#"
+[camera]
+position = [0.0, 0.0, 6.0]
+target = [0.0, 0.0, 0.0]
+fov = 30.0
+[render]
+width = 64
+height = 48
+shadows = "none"
+ao = false
+background = [0.5, 0.5, 0.5]
+[[light]]
+intensity = 0.0
+[material.glass]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+transparency = 1.0
+ior = 1.5
+fresnel = false
+[material.lit]
+emission = [1.0, 1.0, 1.0]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+[material.dark]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+[[object]]
+material = "glass"
+shape = "sphere(p, 1.0)"
+[[object]]
+material = "lit"
+shape = "box(p - vec3(0.0, 0.9, -3.0), vec3(20.0, 0.6, 0.1))"
+[[object]]
+material = "dark"
+shape = "box(p - vec3(0.0, 0.0, -3.2), vec3(20.0, 20.0, 0.1))"
+"#;
+
+#[test]
+fn glass_sphere_refracts_the_stripe_where_snell_says_and_inverts_it() {
+    let scene = load_str(GLASS, "glass.toml", &[]).unwrap();
+    let (img, _) = render(&scene, &RenderOptions::default());
+    let cam = RayCamera::new(&scene.camera, W, H);
+    let o = cam.origin();
+    let (mut lit_below, mut checked) = (0, 0);
+    for j in 0..H {
+        for i in 0..W {
+            let d = cam.direction(i as f64 + 0.5, j as f64 + 0.5);
+            let Some((t, _)) = sphere_hits(o, d, DVec3::ZERO, 1.0) else {
+                continue;
+            };
+            let p = o + d * t;
+            if p.dot(-d) < 0.3 {
+                continue; // near the silhouette
+            }
+            // In at p, across the sphere, out at q.
+            let inside = snell(d, p, 1.0 / 1.5).normalize();
+            let (_, t2) = sphere_hits(p, inside, DVec3::ZERO, 1.0).unwrap();
+            let q = p + inside * t2;
+            let out = snell(inside, -q, 1.5).normalize();
+            // The exit ray meets the stripe's front face (z = −2.9) or the dark wall.
+            let s = q + out * ((-2.9 - q.z) / out.z);
+            let dist_to_edge = (s.y - 0.3).abs().min((s.y - 1.5).abs());
+            if dist_to_edge < 0.12 {
+                continue;
+            }
+            let want = if (0.3..1.5).contains(&s.y) { 1.0 } else { 0.0 };
+            let got = img.color[(j * W + i) as usize][0] as f64;
+            assert!(
+                (got - want).abs() < 0.1,
+                "pixel ({i}, {j}): rendered {got}, two refractions say {want}"
+            );
+            checked += 1;
+            if want == 1.0 && p.y < -0.1 {
+                lit_below += 1;
+            }
+        }
+    }
+    // The stripe is above the axis, yet it is seen through the lower half of the sphere.
+    assert!(checked > 300, "{checked}");
+    assert!(lit_below > 10, "{lit_below}");
+}
+
+#[test]
+fn two_refraction_deviation_matches_the_textbook_formula() {
+    // For a ray parallel to the axis at impact parameter b through a sphere of
+    // index n: deviation = 2(θi − θt), sin θi = b/R, sin θt = sin θi / n.
+    for b in [0.1, 0.3, 0.5, 0.7, 0.9] {
+        let d = DVec3::new(0.0, 0.0, -1.0);
+        let o = DVec3::new(0.0, b, 5.0);
+        let (t, _) = sphere_hits(o, d, DVec3::ZERO, 1.0).unwrap();
+        let p = o + d * t;
+        let inside = snell(d, p, 1.0 / 1.5).normalize();
+        let (_, t2) = sphere_hits(p, inside, DVec3::ZERO, 1.0).unwrap();
+        let q = p + inside * t2;
+        let out = snell(inside, -q, 1.5).normalize();
+        let deviation = out.angle_between(d);
+        let (ti, tt) = (f64::asin(b), f64::asin(b / 1.5));
+        assert!((deviation - 2.0 * (ti - tt)).abs() < 1e-9, "b = {b}: {deviation}");
+    }
+}
+
+#[test]
+fn reflective_renders_are_the_same_whatever_the_thread_count() {
+    let scene = load_str(&CHECKER.replace("width = 64", "width = 96"), "c.toml", &[]).unwrap();
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let a = one.install(|| render(&scene, &RenderOptions::default())).0;
+    let b = two.install(|| render(&scene, &RenderOptions::default())).0;
+    assert_eq!(a.color, b.color);
+}
