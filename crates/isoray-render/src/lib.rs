@@ -203,6 +203,8 @@ struct Worker<'s> {
     scene_eval: BatchEvaluator<'s, f32>,
     /// The unsigned distance to the nearest surface, for rays inside objects.
     surf_eval: BatchEvaluator<'s, f32>,
+    /// What shadow rays trace when some object is transparent.
+    shadow_evals: Option<whitted::ShadowEvals<'s>>,
     object_evals: Vec<BatchEvaluator<'s, f32>>,
     scratch: Scratch,
     rays: Rays,
@@ -236,6 +238,11 @@ impl<'s> Worker<'s> {
         Worker {
             scene_eval: BatchEvaluator::new(ctx.scene.shape.tape()),
             surf_eval: BatchEvaluator::new(ctx.scene.surfaces.tape()),
+            shadow_evals: ctx.scene.shadow.as_ref().map(|sh| whitted::ShadowEvals {
+                opaque: BatchEvaluator::new(sh.opaque.tape()),
+                clear: BatchEvaluator::new(sh.transparent.tape()),
+                clear_surfaces: BatchEvaluator::new(sh.transparent_surfaces.tape()),
+            }),
             object_evals,
             scratch: Scratch::default(),
             rays: Rays::default(),
@@ -372,14 +379,29 @@ impl<'s> Worker<'s> {
     /// occlusion) and direct light, the ambient and diffuse parts weighted by
     /// `local` (what the Fresnel split leaves to local shading). Adds the
     /// evaluations spent to `evals`.
-    fn shade(&mut self, ctx: &Ctx, hs: &HitSet, surfaces: &[Surface], local: &[Vec3], evals: &mut u64) -> Vec<Vec3> {
+    /// `media` holds, per hit, the objects the arriving ray is inside.
+    fn shade(
+        &mut self,
+        ctx: &Ctx,
+        hs: &HitSet,
+        surfaces: &[Surface],
+        local: &[Vec3],
+        media: &[whitted::Media],
+        evals: &mut u64,
+    ) -> Vec<Vec3> {
         let scene = ctx.scene;
         let s = &scene.render;
         let m = hs.idx.len();
         if m == 0 {
             return Vec::new();
         }
-        let ao = self.ambient_occlusion(s, hs, evals);
+        let mut ao = self.ambient_occlusion(s, hs, evals);
+        // Inside a transparent object the occlusion estimate sees its walls: none there.
+        for (a, md) in ao.iter_mut().zip(media) {
+            if md.is_inside() {
+                *a = 1.0;
+            }
+        }
         let pos = |k: usize| Vec3::new(hs.px[k], hs.py[k], hs.pz[k]);
         let nrm = |k: usize| Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]);
         let mut color: Vec<Vec3> = (0..m)
@@ -390,14 +412,20 @@ impl<'s> Worker<'s> {
         let mut tmax = Vec::new();
         let mut which = Vec::new();
         let mut vis = Vec::new();
+        let mut origins = Vec::new();
+        let mut ldirs = Vec::new();
+        let mut start = Vec::new();
         for light in &scene.lights {
             let radiance = Vec3::from(light.color.map(|c| c as f32)) * light.intensity as f32;
             shadow_rays.clear();
             tmax.clear();
             which.clear();
+            origins.clear();
+            ldirs.clear();
+            start.clear();
             let mut dirs = Vec::with_capacity(m);
             let mut atten = Vec::with_capacity(m);
-            for k in 0..m {
+            for (k, &md) in media.iter().enumerate().take(m) {
                 let p = pos(k);
                 let (l, dist) = match light.kind {
                     LightKind::Directional { direction } => (Vec3::from(direction.map(|c| c as f32)), f32::INFINITY),
@@ -419,10 +447,26 @@ impl<'s> Worker<'s> {
                     let o = p + nrm(k) * (2.0 * s.hit_epsilon as f32);
                     shadow_rays.push(o.to_array(), l.to_array());
                     tmax.push(dist.min(s.shadow_max_distance as f32));
+                    origins.push(o);
+                    ldirs.push(l);
+                    start.push(md);
                 }
             }
+            // With transparent objects, opaque ones occlude (with the penumbra
+            // estimate) and transparent ones transmit, traced separately.
+            let transmitted = if self.shadow_evals.is_some() && s.shadows != ShadowMode::None {
+                let (t, e) = self.transmission(ctx, &origins, &ldirs, &tmax, &start);
+                *evals += e;
+                Some(t)
+            } else {
+                None
+            };
+            let occluders = match &mut self.shadow_evals {
+                Some(se) => &mut se.opaque,
+                None => &mut self.scene_eval,
+            };
             *evals += shadow_march(
-                &mut self.scene_eval,
+                occluders,
                 &shadow_rays,
                 &tmax,
                 s.shadows,
@@ -438,8 +482,9 @@ impl<'s> Worker<'s> {
                 if s.shadows != ShadowMode::None && s.shadow_exponent != 1.0 {
                     sh = sh.powf(s.shadow_exponent as f32);
                 }
+                let through = transmitted.as_ref().map_or(Vec3::ONE, |t| t[r]);
                 let (diffuse, specular) = shade::direct_parts(&surfaces[k], nrm(k), v, dirs[k]);
-                color[k] += radiance * atten[k] * sh * (local[k] * diffuse + specular);
+                color[k] += radiance * atten[k] * sh * through * (local[k] * diffuse + specular);
             }
         }
         color

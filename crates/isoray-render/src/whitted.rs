@@ -12,10 +12,25 @@
 
 use glam::Vec3;
 
+use isoray_shape::BatchEvaluator;
+
 use crate::optics::{fresnel, reflect, refract, split};
 use crate::shade::Surface;
-use crate::trace::Rays;
+use crate::trace::{sphere_trace, Hit, Rays};
 use crate::{Ctx, HitSet, Worker};
+
+/// The fields shadow rays trace when some object is transparent.
+pub(crate) struct ShadowEvals<'s> {
+    /// The union of the opaque objects (occluders).
+    pub(crate) opaque: BatchEvaluator<'s, f32>,
+    /// The union of the transparent objects.
+    pub(crate) clear: BatchEvaluator<'s, f32>,
+    /// The unsigned distance to the nearest transparent surface.
+    pub(crate) clear_surfaces: BatchEvaluator<'s, f32>,
+}
+
+/// Interfaces a shadow ray crosses at most (it keeps its transmission after).
+const MAX_SHADOW_SEGMENTS: usize = 8;
 
 /// The objects a ray is inside, innermost last.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -43,7 +58,7 @@ impl Media {
             self.len -= 1;
         }
     }
-    fn is_inside(&self) -> bool {
+    pub(crate) fn is_inside(&self) -> bool {
         self.len > 0
     }
 }
@@ -180,7 +195,8 @@ impl Worker<'_> {
                         }
                     }
                 }
-                let colors = self.shade(ctx, &hs, &surfaces, &local, &mut evals);
+                let hit_media: Vec<Media> = hs.idx.iter().map(|&i| packet.media[i]).collect();
+                let colors = self.shade(ctx, &hs, &surfaces, &local, &hit_media, &mut evals);
                 for (k, &i) in hs.idx.iter().enumerate() {
                     samples[packet.sample[i] as usize] += packet.weight[i] * colors[k];
                 }
@@ -189,5 +205,119 @@ impl Worker<'_> {
             generation.push((next_in, None));
         }
         evals
+    }
+
+    /// The colour transmitted along straight shadow rays (o + t·l, t < tmax)
+    /// through the transparent objects: each interface multiplies by the
+    /// object's transparency × (1 − reflectivity), each stretch inside by
+    /// exp(−absorption × length). `start` holds the transparent objects each
+    /// ray starts inside. Refraction is not followed (no caustics).
+    pub(crate) fn transmission(
+        &mut self,
+        ctx: &Ctx,
+        o: &[Vec3],
+        l: &[Vec3],
+        tmax: &[f32],
+        start: &[Media],
+    ) -> (Vec<Vec3>, u64) {
+        let s = &ctx.scene.render;
+        let off = OFFSET * s.hit_epsilon as f32;
+        let n = o.len();
+        let mut out = vec![Vec3::ONE; n];
+        let mut origin = o.to_vec();
+        let mut left = tmax.to_vec();
+        let mut media = start.to_vec();
+        let mut active: Vec<usize> = (0..n).collect();
+        let mut evals = 0;
+        let mut hits: Vec<Hit> = Vec::new();
+        let clear_of = |obj: usize| {
+            let m = &ctx.surfaces[obj];
+            Vec3::splat(m.transparency) * (Vec3::ONE - m.reflectivity)
+        };
+        for _ in 0..MAX_SHADOW_SEGMENTS {
+            if active.is_empty() {
+                break;
+            }
+            let mut still = Vec::new();
+            for inside in [false, true] {
+                let group: Vec<usize> = active
+                    .iter()
+                    .copied()
+                    .filter(|&i| media[i].is_inside() == inside)
+                    .collect();
+                if group.is_empty() {
+                    continue;
+                }
+                let mut rays = Rays::default();
+                for &i in &group {
+                    rays.push(origin[i].to_array(), l[i].to_array());
+                }
+                let Some(se) = self.shadow_evals.as_mut() else { break };
+                let ev = if inside { &mut se.clear_surfaces } else { &mut se.clear };
+                evals += sphere_trace(ev, &rays, s, &mut self.scratch, &mut hits);
+                // The transparent object at each hit: nearest surface among them.
+                let pts: Vec<(usize, Vec3, f32)> = group
+                    .iter()
+                    .zip(&hits)
+                    .filter(|(&i, h)| h.t < left[i])
+                    .map(|(&i, h)| (i, origin[i] + l[i] * h.t, h.t))
+                    .collect();
+                for (r, &i) in group.iter().enumerate() {
+                    if hits[r].t >= left[i] {
+                        // No further interface before the light (inside: absorb the rest).
+                        if let Some(top) = media[i].top() {
+                            out[i] *= (-ctx.surfaces[top].absorption * left[i].min(1e4)).exp();
+                        }
+                    }
+                }
+                let objs = self.nearest_objects(ctx, &pts, &mut evals);
+                for ((i, p, t), obj) in pts.into_iter().zip(objs) {
+                    if let Some(top) = media[i].top() {
+                        out[i] *= (-ctx.surfaces[top].absorption * t).exp();
+                    }
+                    if media[i].contains(obj) {
+                        media[i].remove(obj);
+                    } else {
+                        out[i] *= clear_of(obj);
+                        media[i].push(obj);
+                    }
+                    origin[i] = p + l[i] * off;
+                    left[i] -= t + off;
+                    if out[i].max_element() > 1e-4 && left[i] > 0.0 {
+                        still.push(i);
+                    }
+                }
+            }
+            active = still;
+        }
+        // Rays still crossing interfaces after the last segment (grazing a
+        // surface, in and out within the offset) keep what they have.
+        (out, evals)
+    }
+
+    /// The object whose surface is nearest each point (|d| smallest).
+    fn nearest_objects(&mut self, ctx: &Ctx, pts: &[(usize, Vec3, f32)], evals: &mut u64) -> Vec<usize> {
+        let m = pts.len();
+        if self.object_evals.is_empty() || m == 0 {
+            return vec![0; m];
+        }
+        let xs: Vec<f32> = pts.iter().map(|p| p.1.x).collect();
+        let ys: Vec<f32> = pts.iter().map(|p| p.1.y).collect();
+        let zs: Vec<f32> = pts.iter().map(|p| p.1.z).collect();
+        let mut best = vec![(f32::INFINITY, 0usize); m];
+        let mut d = vec![0.0f32; m];
+        for (j, ev) in self.object_evals.iter_mut().enumerate() {
+            if ctx.surfaces[j].transparency <= 0.0 {
+                continue;
+            }
+            ev.eval(&xs, &ys, &zs, &mut d);
+            *evals += m as u64;
+            for q in 0..m {
+                if d[q].abs() < best[q].0 {
+                    best[q] = (d[q].abs(), j);
+                }
+            }
+        }
+        best.into_iter().map(|b| b.1).collect()
     }
 }

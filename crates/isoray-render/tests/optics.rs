@@ -228,3 +228,80 @@ fn reflective_renders_are_the_same_whatever_the_thread_count() {
     let b = two.install(|| render(&scene, &RenderOptions::default())).0;
     assert_eq!(a.color, b.color);
 }
+
+const SLAB: &str = r#"
+[camera]
+position = [0.0, 0.8, 6.0]
+target = [0.0, 0.0, 0.0]
+fov = 60.0
+[render]
+width = 48
+height = 48
+shadows = "hard"
+ao = false
+background = [0.0, 0.0, 0.0]
+[[light]]
+kind = "directional"
+direction = [0.0, 1.0, 0.0]
+[material.floor]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.8, 0.8, 0.8]
+specular = [0.0, 0.0, 0.0]
+[material.glass]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+transparency = 1.0
+ior = 1.0
+fresnel = false
+absorption = [1.0, 0.0, 0.0]
+[[object]]
+material = "floor"
+shape = "plane(p, vec3(0.0, 1.0, 0.0), 0.0)"
+[[object]]
+material = "glass"
+shape = "box(p - vec3(-1.5, 2.0, 0.0), vec3(1.0, 0.25, 1.0))"
+[[object]]
+material = "floor"
+shape = "box(p - vec3(1.5, 2.0, 0.0), vec3(0.6, 0.1, 0.6))"
+"#;
+
+#[test]
+fn shadows_through_glass_are_attenuated_not_blocked() {
+    // Light straight down. Under the glass slab (0.5 thick, absorption 1 in
+    // red) the floor keeps exp(−0.5) of its red light and all of its green;
+    // under the opaque slab it is black. The camera looks at the floor from
+    // low down, under the slabs.
+    let scene = load_str(SLAB, "slab.toml", &[]).unwrap();
+    let (img, _) = render(&scene, &RenderOptions::default());
+    let cam = RayCamera::new(&scene.camera, 48, 48);
+    let floor_pixel = |x: f64, z: f64| -> [f32; 3] {
+        // The pixel whose ray meets the floor nearest (x, 0, z).
+        let mut best = (f64::INFINITY, 0usize);
+        for j in 0..48u32 {
+            for i in 0..48u32 {
+                let d = cam.direction(i as f64 + 0.5, j as f64 + 0.5);
+                let t = -cam.origin().y / d.y;
+                let q = cam.origin() + d * t;
+                let e = (q.x - x).hypot(q.z - z);
+                if e < best.0 {
+                    best = (e, (j * 48 + i) as usize);
+                }
+            }
+        }
+        img.color[best.1]
+    };
+    let lit = floor_pixel(0.0, 1.8);
+    let under_opaque = floor_pixel(1.5, 0.0);
+    assert!(lit[0] > 0.5 && (lit[0] - lit[1]).abs() < 1e-3, "{lit:?}");
+    assert!(under_opaque[0] < 0.02 && under_opaque[1] < 0.02, "{under_opaque:?}");
+    let under_glass = floor_pixel(-1.5, 0.0);
+    let red = under_glass[0] / lit[0];
+    let green = under_glass[1] / lit[1];
+    assert!((green - 1.0).abs() < 0.02, "{under_glass:?} vs {lit:?}");
+    assert!(
+        (red - (-0.5f32).exp()).abs() < 0.02,
+        "red ratio {red}, want exp(-0.5) = {}",
+        (-0.5f32).exp()
+    );
+}

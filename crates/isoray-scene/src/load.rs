@@ -916,6 +916,39 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         u = builder.min(u, a);
     }
     let surfaces = Shape::from_tape(builder.tape(u));
+    // Shadows with transparent objects: opaque objects occlude (with the
+    // penumbra estimate), transparent ones transmit (traced separately).
+    let clear: Vec<bool> = objects
+        .iter()
+        .map(|o| materials[o.material].transparency > 0.0)
+        .collect();
+    let shadow = if clear.iter().any(|&c| c) {
+        let pick = |b: &mut Builder, want: bool, unsigned: bool| {
+            let mut acc: Option<isoray_shape::Node> = None;
+            for (&n, &c) in nodes.iter().zip(&clear) {
+                if c != want {
+                    continue;
+                }
+                let n = if unsigned { b.abs(n) } else { n };
+                acc = Some(match acc {
+                    None => n,
+                    Some(a) if unsigned => b.min(a, n),
+                    Some(a) => smooth_union(b, a, n, render.blend),
+                });
+            }
+            acc.unwrap_or_else(|| b.constant(1e9))
+        };
+        let opaque = pick(&mut builder, false, false);
+        let clear_union = pick(&mut builder, true, false);
+        let clear_surfaces = pick(&mut builder, true, true);
+        Some(ShadowShapes {
+            opaque: Shape::from_tape(builder.tape(opaque)),
+            transparent: Shape::from_tape(builder.tape(clear_union)),
+            transparent_surfaces: Shape::from_tape(builder.tape(clear_surfaces)),
+        })
+    } else {
+        None
+    };
     Ok(Scene {
         camera,
         render,
@@ -925,6 +958,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         params,
         shape,
         surfaces,
+        shadow,
         library: lib,
         param_ranges,
     })

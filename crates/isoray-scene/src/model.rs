@@ -299,10 +299,24 @@ pub struct Scene {
     /// The unsigned distance to the nearest object surface, min over objects
     /// of |dᵢ|: what rays travelling inside objects (refraction) trace.
     pub surfaces: Shape,
+    /// When some object is transparent, what shadow rays trace: None when
+    /// every object is opaque (shadow rays then trace `shape`).
+    pub shadow: Option<ShadowShapes>,
     /// The scene's parameters and user surfaces, with their cached analyses.
     pub library: Library,
     /// Ranges declared for number parameters (for sliders), in file order.
     pub param_ranges: Vec<ParamRange>,
+}
+
+/// The fields shadow rays trace in a scene with transparent objects.
+#[derive(Debug, Clone)]
+pub struct ShadowShapes {
+    /// The union of the opaque objects (occluders; a constant 10⁹ if none).
+    pub opaque: Shape,
+    /// The union of the transparent objects.
+    pub transparent: Shape,
+    /// The unsigned distance to the nearest transparent surface.
+    pub transparent_surfaces: Shape,
 }
 
 /// The range declared for a number parameter: `{ default = 1.0, range = [0.5, 2.0] }`.
