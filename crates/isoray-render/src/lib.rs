@@ -28,6 +28,7 @@
 
 pub mod bounds;
 pub mod camera;
+pub mod lights;
 pub mod optics;
 pub mod output;
 pub mod shade;
@@ -85,6 +86,30 @@ pub struct Stats {
     /// The largest factor a step was too long by; a `lipschitz_factor` at
     /// least this large on the responsible surface removes the overshoots.
     pub overshoot_factor: f32,
+    /// Rays traced, by kind.
+    pub rays: RayCounts,
+}
+
+/// Rays traced, by kind.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    /// Camera rays (pixels × aa²).
+    pub primary: u64,
+    /// Mirror-reflected rays.
+    pub reflected: u64,
+    /// Refracted rays.
+    pub refracted: u64,
+    /// Shadow rays (one per light sample and shaded hit facing the light).
+    pub shadow: u64,
+}
+
+impl std::ops::AddAssign for RayCounts {
+    fn add_assign(&mut self, o: RayCounts) {
+        self.primary += o.primary;
+        self.reflected += o.reflected;
+        self.refracted += o.refracted;
+        self.shadow += o.shadow;
+    }
 }
 
 /// Number of tiles an image of the scene's size is split into.
@@ -104,6 +129,7 @@ struct TileOut {
     evals: u64,
     overshoots: u64,
     worst_overshoot: f32,
+    counts: RayCounts,
 }
 
 /// Renders the scene.
@@ -137,8 +163,10 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> (RenderedImage, Stats) {
     };
     let mut evals = 0;
     let (mut overshoots, mut worst) = (0, 0.0f32);
+    let mut counts = RayCounts::default();
     for t in outs {
         evals += t.evals;
+        counts += t.counts;
         overshoots += t.overshoots;
         worst = worst.max(t.worst_overshoot);
         for j in 0..t.h {
@@ -163,6 +191,10 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> (RenderedImage, Stats) {
             evaluations: evals,
             overshoots,
             overshoot_factor: worst,
+            rays: RayCounts {
+                primary: n as u64 * aa * aa,
+                ..counts
+            },
         },
     )
 }
@@ -205,6 +237,10 @@ struct Worker<'s> {
     surf_eval: BatchEvaluator<'s, f32>,
     /// What shadow rays trace when some object is transparent.
     shadow_evals: Option<whitted::ShadowEvals<'s>>,
+    /// Rays traced, by kind (summed over tiles).
+    counts: RayCounts,
+    /// The current tile's top-left pixel (seeds the light samples).
+    tile_origin: (u32, u32),
     object_evals: Vec<BatchEvaluator<'s, f32>>,
     scratch: Scratch,
     rays: Rays,
@@ -238,6 +274,8 @@ impl<'s> Worker<'s> {
         Worker {
             scene_eval: BatchEvaluator::new(ctx.scene.shape.tape()),
             surf_eval: BatchEvaluator::new(ctx.scene.surfaces.tape()),
+            counts: RayCounts::default(),
+            tile_origin: (0, 0),
             shadow_evals: ctx.scene.shadow.as_ref().map(|sh| whitted::ShadowEvals {
                 opaque: BatchEvaluator::new(sh.opaque.tape()),
                 clear: BatchEvaluator::new(sh.transparent.tape()),
@@ -308,6 +346,7 @@ impl<'s> Worker<'s> {
     fn tile(&mut self, ctx: &Ctx, x0: u32, y0: u32, tw: u32, th: u32, aovs: bool) -> TileOut {
         let s = &ctx.scene.render;
         let aa = s.aa;
+        self.tile_origin = (x0, y0);
         let origin = ctx.cam.origin().as_vec3().to_array();
         // Primary rays: aa×aa per pixel at the centres of a uniform sub-grid.
         self.rays.clear();
@@ -372,6 +411,7 @@ impl<'s> Worker<'s> {
             evals,
             overshoots: std::mem::take(&mut self.scratch.overshoots),
             worst_overshoot: std::mem::take(&mut self.scratch.worst_overshoot),
+            counts: std::mem::take(&mut self.counts),
         }
     }
 
@@ -379,7 +419,9 @@ impl<'s> Worker<'s> {
     /// occlusion) and direct light, the ambient and diffuse parts weighted by
     /// `local` (what the Fresnel split leaves to local shading). Adds the
     /// evaluations spent to `evals`.
-    /// `media` holds, per hit, the objects the arriving ray is inside.
+    /// `media` holds, per hit, the objects the arriving ray is inside, and
+    /// `seeds` a per-sample seed for area-light sampling.
+    #[allow(clippy::too_many_arguments)]
     fn shade(
         &mut self,
         ctx: &Ctx,
@@ -387,6 +429,7 @@ impl<'s> Worker<'s> {
         surfaces: &[Surface],
         local: &[Vec3],
         media: &[whitted::Media],
+        seeds: &[u32],
         evals: &mut u64,
     ) -> Vec<Vec3> {
         let scene = ctx.scene;
@@ -415,8 +458,29 @@ impl<'s> Worker<'s> {
         let mut origins = Vec::new();
         let mut ldirs = Vec::new();
         let mut start = Vec::new();
-        for light in &scene.lights {
-            let radiance = Vec3::from(light.color.map(|c| c as f32)) * light.intensity as f32;
+        // Area lights are sampled at `samples` points each (a hard shadow ray
+        // per point); point and directional lights once, with the penumbra estimate.
+        let passes: Vec<(usize, u32, u32)> = scene
+            .lights
+            .iter()
+            .enumerate()
+            .flat_map(|(li, light)| {
+                let n = match light.kind {
+                    LightKind::Sphere { .. } | LightKind::Rect { .. } => light.samples,
+                    _ => 1,
+                };
+                (0..n).map(move |j| (li, j, n))
+            })
+            .collect();
+        for (li, j, n) in passes {
+            let light = &scene.lights[li];
+            let area = n > 1 || matches!(light.kind, LightKind::Sphere { .. } | LightKind::Rect { .. });
+            let mode = if area && s.shadows != ShadowMode::None {
+                ShadowMode::Hard
+            } else {
+                s.shadows
+            };
+            let radiance = Vec3::from(light.color.map(|c| c as f32)) * (light.intensity as f32 / n as f32);
             shadow_rays.clear();
             tmax.clear();
             which.clear();
@@ -427,13 +491,13 @@ impl<'s> Worker<'s> {
             let mut atten = Vec::with_capacity(m);
             for (k, &md) in media.iter().enumerate().take(m) {
                 let p = pos(k);
-                let (l, dist) = match light.kind {
-                    LightKind::Directional { direction } => (Vec3::from(direction.map(|c| c as f32)), f32::INFINITY),
-                    LightKind::Point { position } => {
-                        let v = Vec3::from(position.map(|c| c as f32)) - p;
-                        (v.normalize_or_zero(), v.length())
-                    }
-                };
+                let (l, dist) = lights::sample(
+                    &light.kind,
+                    p,
+                    j,
+                    n,
+                    seeds[k].wrapping_add((li as u32).wrapping_mul(0x9E37_79B9)),
+                );
                 let a = light.attenuation;
                 let att = if dist.is_finite() {
                     1.0 / (a[0] as f32 + a[1] as f32 * dist + a[2] as f32 * dist * dist).max(1e-12)
@@ -469,17 +533,18 @@ impl<'s> Worker<'s> {
                 occluders,
                 &shadow_rays,
                 &tmax,
-                s.shadows,
+                mode,
                 light.size as f32,
                 s,
                 &mut self.scratch,
                 &mut vis,
             );
+            self.counts.shadow += shadow_rays.len() as u64;
             for (r, &k) in which.iter().enumerate() {
                 let i = hs.idx[k];
                 let v = -Vec3::new(self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]);
                 let mut sh = vis[r];
-                if s.shadows != ShadowMode::None && s.shadow_exponent != 1.0 {
+                if mode != ShadowMode::None && s.shadow_exponent != 1.0 {
                     sh = sh.powf(s.shadow_exponent as f32);
                 }
                 let through = transmitted.as_ref().map_or(Vec3::ONE, |t| t[r]);

@@ -14,6 +14,7 @@ use glam::Vec3;
 
 use isoray_shape::BatchEvaluator;
 
+use crate::lights::hash;
 use crate::optics::{fresnel, reflect, refract, split};
 use crate::shade::Surface;
 use crate::trace::{sphere_trace, Hit, Rays};
@@ -186,17 +187,25 @@ impl Worker<'_> {
                     if wr.max_element() >= s.min_weight as f32 {
                         let target = if media.is_inside() { &mut next_in } else { &mut next_out };
                         target.push(p + nrm * off, reflect(d, nrm), packet.sample[i], wr, media);
+                        self.counts.reflected += 1;
                     }
                     if let Some(t) = transmitted {
                         let wt = w * sp.transmit;
                         if wt.max_element() >= s.min_weight as f32 {
                             let target = if after.is_inside() { &mut next_in } else { &mut next_out };
                             target.push(p - nrm * off, t, packet.sample[i], wt, after);
+                            self.counts.refracted += 1;
                         }
                     }
                 }
                 let hit_media: Vec<Media> = hs.idx.iter().map(|&i| packet.media[i]).collect();
-                let colors = self.shade(ctx, &hs, &surfaces, &local, &hit_media, &mut evals);
+                let (tx, ty) = self.tile_origin;
+                let seeds: Vec<u32> = hs
+                    .idx
+                    .iter()
+                    .map(|&i| hash(hash(hash(tx) ^ ty) ^ packet.sample[i]).wrapping_add(depth))
+                    .collect();
+                let colors = self.shade(ctx, &hs, &surfaces, &local, &hit_media, &seeds, &mut evals);
                 for (k, &i) in hs.idx.iter().enumerate() {
                     samples[packet.sample[i] as usize] += packet.weight[i] * colors[k];
                 }

@@ -305,3 +305,77 @@ fn shadows_through_glass_are_attenuated_not_blocked() {
         (-0.5f32).exp()
     );
 }
+
+fn penumbra_scene(radius: f64) -> String {
+    format!(
+        r#"
+[camera]
+position = [0.0, 1.0, 6.0]
+target = [0.0, 0.0, 0.0]
+fov = 30.0
+[render]
+width = 96
+height = 16
+shadows = "soft"
+ao = false
+background = [0.0, 0.0, 0.0]
+[[light]]
+kind = "sphere"
+position = [0.0, 4.0, 0.0]
+radius = {radius:?}
+samples = 64
+[material.floor]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [1.0, 1.0, 1.0]
+specular = [0.0, 0.0, 0.0]
+[[object]]
+material = "floor"
+shape = "plane(p, vec3(0.0, 1.0, 0.0), 0.0)"
+[[object]]
+material = "floor"
+shape = "box(p - vec3(-5.0, 2.0, 0.0), vec3(5.0, 0.02, 5.0))"
+"#
+    )
+}
+
+/// The width on the floor over which the light goes from 10 % to 90 % of full.
+fn penumbra_width(radius: f64) -> f64 {
+    let scene = load_str(&penumbra_scene(radius), "p.toml", &[]).unwrap();
+    let (img, _) = render(&scene, &RenderOptions::default());
+    let cam = RayCamera::new(&scene.camera, 96, 16);
+    let row = 8u32;
+    let xs: Vec<(f64, f32)> = (0..96u32)
+        .map(|i| {
+            let d = cam.direction(i as f64 + 0.5, row as f64 + 0.5);
+            let q = cam.origin() + d * (-cam.origin().y / d.y);
+            (q.x, img.color[(row * 96 + i) as usize][0])
+        })
+        .collect();
+    let full = xs.iter().map(|x| x.1).fold(0.0f32, f32::max);
+    let first = |f: f32| xs.iter().find(|x| x.1 >= f * full).map(|x| x.0).unwrap();
+    first(0.9) - first(0.1)
+}
+
+#[test]
+fn area_light_penumbra_grows_with_the_light() {
+    // A light of radius r at height 4 over an occluder edge at height 2: the
+    // penumbra on the floor spans from −r to +r around the edge's shadow, and
+    // 10 %–90 % of it (for a disc seen edge-on, about 0.68 of the span) grows with r.
+    let small = penumbra_width(0.25);
+    let large = penumbra_width(0.75);
+    assert!(large > 2.0 * small, "{small} {large}");
+    for (r, w) in [(0.25, small), (0.75, large)] {
+        assert!(w > 0.9 * r && w < 2.0 * r, "radius {r}: width {w}");
+    }
+}
+
+#[test]
+fn area_lights_are_deterministic_across_thread_counts() {
+    let scene = load_str(&penumbra_scene(0.5), "p.toml", &[]).unwrap();
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+    let a = one.install(|| render(&scene, &RenderOptions::default()));
+    let b = three.install(|| render(&scene, &RenderOptions::default()));
+    assert_eq!(a.0.color, b.0.color);
+    assert!(a.1.rays.shadow >= 96 * 16 * 64 / 2, "{:?}", a.1.rays);
+}

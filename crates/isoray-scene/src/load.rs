@@ -552,31 +552,60 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         };
         for (i, lv) in items.into_iter().enumerate() {
             let mut r = Reader::new(src, lv, &format!("light.{i}"))?;
-            let kind_name = r.choice("kind", &[("directional", 0), ("point", 1)], 0)?;
-            let kind = if kind_name == 0 {
-                let dir = r.vec3("direction", [-1.0, 2.0, 1.0])?;
-                if norm(dir) < 1e-12 {
-                    let o = r.get("direction").map(|l| l.origin).unwrap_or(lv.origin);
-                    return Err(src.error(
-                        o,
-                        format!("`light.{i}.direction` must not be zero"),
-                        Some("expected a direction towards the light"),
-                        &[],
-                    ));
-                }
-                LightKind::Directional {
-                    direction: normalize(dir),
-                }
-            } else {
-                let Some(position) = r.vec3_opt("position")? else {
-                    return Err(src.error(
+            let kind_name = r.choice(
+                "kind",
+                &[("directional", 0), ("point", 1), ("sphere", 2), ("rect", 3)],
+                0,
+            )?;
+            let need = |r: &mut Reader, key: &str, what: &str| -> Result<Vec3> {
+                r.vec3_opt(key)?.ok_or_else(|| {
+                    src.error(
                         lv.origin,
-                        format!("point light `light.{i}` needs a `position`"),
-                        Some("add position = [x, y, z]"),
+                        format!("{what} light `light.{i}` needs a `{key}`"),
+                        Some(&format!("add {key} = [x, y, z]")),
                         &[],
-                    ));
-                };
-                LightKind::Point { position }
+                    )
+                })
+            };
+            let kind = match kind_name {
+                0 => {
+                    let dir = r.vec3("direction", [-1.0, 2.0, 1.0])?;
+                    if norm(dir) < 1e-12 {
+                        let o = r.get("direction").map(|l| l.origin).unwrap_or(lv.origin);
+                        return Err(src.error(
+                            o,
+                            format!("`light.{i}.direction` must not be zero"),
+                            Some("expected a direction towards the light"),
+                            &[],
+                        ));
+                    }
+                    LightKind::Directional {
+                        direction: normalize(dir),
+                    }
+                }
+                1 => LightKind::Point {
+                    position: need(&mut r, "position", "point")?,
+                },
+                2 => {
+                    let position = need(&mut r, "position", "sphere")?;
+                    let radius = r.positive("radius", 0.5)?;
+                    LightKind::Sphere { position, radius }
+                }
+                _ => {
+                    let position = need(&mut r, "position", "rect")?;
+                    let u = need(&mut r, "u", "rect")?;
+                    let v = need(&mut r, "v", "rect")?;
+                    if norm(cross(u, v)) < 1e-12 {
+                        let o = r.get("v").map(|l| l.origin).unwrap_or(lv.origin);
+                        return Err(src.error(
+                            o,
+                            format!("`light.{i}`: the edges `u` and `v` must not be parallel or zero"),
+                            Some("expected a second edge across the first"),
+                            &[],
+                        ));
+                    }
+                    LightKind::Rect { position, u, v }
+                }
             };
             let light = Light {
                 kind,
@@ -584,6 +613,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 intensity: r.non_negative("intensity", 1.0)?,
                 size: r.positive("size", 0.1)?,
                 attenuation: r.color("attenuation", [1.0, 0.0, 0.0])?,
+                samples: r.int("samples", 16, 1, 4096)?,
             };
             r.finish(&[
                 "kind",
@@ -593,6 +623,10 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 "intensity",
                 "size",
                 "attenuation",
+                "samples",
+                "radius",
+                "u",
+                "v",
             ])?;
             lights.push(light);
         }

@@ -163,6 +163,23 @@ pub enum LightKind {
         /// Where it is.
         position: Vec3,
     },
+    /// A glowing sphere, sampled at `Light::samples` points (hard shadow per sample).
+    Sphere {
+        /// Its centre.
+        position: Vec3,
+        /// Its radius.
+        radius: f64,
+    },
+    /// A glowing parallelogram position + a·u + b·v, a, b ∈ [−½, ½], emitting
+    /// on both sides, sampled at `Light::samples` points.
+    Rect {
+        /// Its centre.
+        position: Vec3,
+        /// One edge.
+        u: Vec3,
+        /// The other edge.
+        v: Vec3,
+    },
 }
 
 /// A light (`[[light]]`).
@@ -176,8 +193,10 @@ pub struct Light {
     pub intensity: f64,
     /// Soft-shadow penumbra size: k = 1/size (default 0.1).
     pub size: f64,
-    /// Point lights: 1/(c + l·d + q·d²) with [c, l, q] (default [1, 0, 0]: none).
+    /// Point and area lights: 1/(c + l·d + q·d²) with [c, l, q] (default [1, 0, 0]: none).
     pub attenuation: Vec3,
+    /// Area lights: shadow rays per shading point (default 16).
+    pub samples: u32,
 }
 
 /// The specular model of a material.

@@ -403,6 +403,21 @@ fn summary(scene: &Scene, stats: &isoray_render::Stats, secs: f64, out: &Path) {
         stats.evaluations as f64 / secs / 1e6,
         out.display()
     );
+    let k = &stats.rays;
+    if k.reflected + k.refracted + k.shadow > 0 {
+        let rate = |n: u64| n as f64 / secs / 1e6;
+        eprintln!(
+            "rays: {} primary ({:.2} M/s), {} reflected ({:.2} M/s), {} refracted ({:.2} M/s), {} shadow ({:.2} M/s)",
+            k.primary,
+            rate(k.primary),
+            k.reflected,
+            rate(k.reflected),
+            k.refracted,
+            rate(k.refracted),
+            k.shadow,
+            rate(k.shadow)
+        );
+    }
 }
 
 fn cmd_eval(scene_path: &Path, overrides: &[String]) -> Result<(), Failure> {
