@@ -71,6 +71,8 @@ pub struct RenderedImage {
     pub depth: Option<Vec<f32>>,
     /// World-space unit normal at the pixel-centre hit; 0 on a miss.
     pub normals: Option<Vec<[f32; 3]>>,
+    /// The diffuse colour of the material at the pixel-centre hit; 0 on a miss.
+    pub albedo: Option<Vec<[f32; 3]>>,
 }
 
 /// Work counters.
@@ -126,6 +128,7 @@ struct TileOut {
     color: Vec<[f32; 3]>,
     depth: Vec<f32>,
     normals: Vec<[f32; 3]>,
+    albedo: Vec<[f32; 3]>,
     evals: u64,
     overshoots: u64,
     worst_overshoot: f32,
@@ -160,6 +163,7 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> (RenderedImage, Stats) {
         color: vec![[0.0; 3]; n],
         depth: opts.aovs.then(|| vec![f32::INFINITY; n]),
         normals: opts.aovs.then(|| vec![[0.0; 3]; n]),
+        albedo: opts.aovs.then(|| vec![[0.0; 3]; n]),
     };
     let mut evals = 0;
     let (mut overshoots, mut worst) = (0, 0.0f32);
@@ -179,6 +183,9 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> (RenderedImage, Stats) {
                 }
                 if let Some(nm) = &mut img.normals {
                     nm[dst] = t.normals[src];
+                }
+                if let Some(al) = &mut img.albedo {
+                    al[dst] = t.albedo[src];
                 }
             }
         }
@@ -383,7 +390,7 @@ impl<'s> Worker<'s> {
             .map(|c| (c.iter().copied().sum::<Vec3>() * inv).to_array())
             .collect();
 
-        let (mut depth, mut normals) = (Vec::new(), Vec::new());
+        let (mut depth, mut normals, mut albedo) = (Vec::new(), Vec::new(), Vec::new());
         if aovs {
             self.rays.clear();
             for j in 0..th {
@@ -399,6 +406,11 @@ impl<'s> Worker<'s> {
             for (k, &i) in hs.idx.iter().enumerate() {
                 normals[i] = [hs.nx[k], hs.ny[k], hs.nz[k]];
             }
+            let (surfaces, _) = self.materials(ctx, &hs, &mut evals, false);
+            albedo = vec![[0.0; 3]; self.rays.len()];
+            for (k, &i) in hs.idx.iter().enumerate() {
+                albedo[i] = surfaces[k].diffuse.to_array();
+            }
         }
         TileOut {
             x0,
@@ -408,6 +420,7 @@ impl<'s> Worker<'s> {
             color,
             depth,
             normals,
+            albedo,
             evals,
             overshoots: std::mem::take(&mut self.scratch.overshoots),
             worst_overshoot: std::mem::take(&mut self.scratch.worst_overshoot),

@@ -48,6 +48,9 @@ enum Command {
         /// Write the normal AOV (channels R, G, B: world-space unit normal, 0 on misses).
         #[arg(long, value_name = "F.exr")]
         normals: Option<PathBuf>,
+        /// Write the albedo AOV (channels R, G, B: diffuse colour at the first hit, 0 on misses).
+        #[arg(long, value_name = "F.exr")]
+        albedo: Option<PathBuf>,
         /// Worker threads (default: all cores).
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
@@ -160,6 +163,7 @@ fn main() -> ExitCode {
             set,
             depth,
             normals,
+            albedo,
             threads,
             quiet,
         } => {
@@ -167,15 +171,13 @@ fn main() -> ExitCode {
             overrides.extend(width.map(|w| format!("render.width={w}")));
             overrides.extend(height.map(|h| format!("render.height={h}")));
             overrides.extend(aa.map(|a| format!("render.aa={a}")));
-            cmd_render(
-                &scene,
-                &overrides,
-                &output,
-                depth.as_deref(),
-                normals.as_deref(),
-                threads,
-                quiet,
-            )
+            let outputs = Outputs {
+                png: &output,
+                depth: depth.as_deref(),
+                normals: normals.as_deref(),
+                albedo: albedo.as_deref(),
+            };
+            cmd_render(&scene, &overrides, &outputs, threads, quiet)
         }
         Command::Eval { scene, set } => cmd_eval(&scene, &set),
         Command::Groebner {
@@ -292,16 +294,28 @@ fn io_failure(message: String) -> Failure {
     Failure { code: 1, message }
 }
 
+/// The files `isoray render` writes.
+struct Outputs<'a> {
+    png: &'a Path,
+    depth: Option<&'a Path>,
+    normals: Option<&'a Path>,
+    albedo: Option<&'a Path>,
+}
+
 fn cmd_render(
     scene_path: &Path,
     overrides: &[String],
-    out: &Path,
-    depth: Option<&Path>,
-    normals: Option<&Path>,
+    outputs: &Outputs,
     threads: Option<usize>,
     quiet: bool,
 ) -> Result<(), Failure> {
-    for (p, what) in [(Some(out), "png"), (depth, "exr"), (normals, "exr")] {
+    let Outputs {
+        png: out,
+        depth,
+        normals,
+        albedo,
+    } = *outputs;
+    for (p, what) in [(Some(out), "png"), (depth, "exr"), (normals, "exr"), (albedo, "exr")] {
         if let Some(p) = p {
             let ext = p.extension().map(|e| e.to_string_lossy().to_lowercase());
             if ext.as_deref() != Some(what) {
@@ -319,7 +333,7 @@ fn cmd_render(
         .map_err(|e| io_failure(format!("cannot start worker threads: {e}")))?;
     let progress = Arc::new(AtomicUsize::new(0));
     let opts = RenderOptions {
-        aovs: depth.is_some() || normals.is_some(),
+        aovs: depth.is_some() || normals.is_some() || albedo.is_some(),
         progress: Some(progress.clone()),
     };
     let start = Instant::now();
@@ -339,6 +353,9 @@ fn cmd_render(
     }
     if let (Some(p), Some(n)) = (normals, &image.normals) {
         w(output::write_exr_rgb(p, image.width, image.height, n))?;
+    }
+    if let (Some(p), Some(a)) = (albedo, &image.albedo) {
+        w(output::write_exr_rgb(p, image.width, image.height, a))?;
     }
     if !quiet {
         summary(&scene, &stats, elapsed, out);

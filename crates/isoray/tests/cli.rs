@@ -374,3 +374,49 @@ fn bound_violations_are_reported_with_a_factor() {
         stderr(&o)
     );
 }
+
+#[test]
+fn albedo_aov_holds_the_first_hit_diffuse_colour() {
+    let scene = write_scene(
+        "albedo.toml",
+        &SPHERE.replace(
+            "[[object]]\nshape = \"sphere(p, 1.0)\"\n",
+            "[material.red]\ndiffuse = [0.7, 0.2, 0.1]\n[[object]]\nmaterial = \"red\"\nshape = \"sphere(p, 1.0)\"\n",
+        ),
+    );
+    let (png, albedo) = (tmp("albedo.png"), tmp("albedo.exr"));
+    let o = run(isoray()
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&png)
+        .arg("--albedo")
+        .arg(&albedo)
+        .arg("-q"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let a = exr::prelude::read_all_flat_layers_from_file(&albedo).unwrap();
+    let ch = |name: &str, i: usize| {
+        let c = a.layer_data[0]
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .unwrap();
+        c.sample_data.value_by_flat_index(i).to_f32()
+    };
+    let centre = 15 * 40 + 20;
+    assert!(
+        (ch("R", centre) - 0.7).abs() < 1e-6
+            && (ch("G", centre) - 0.2).abs() < 1e-6
+            && (ch("B", centre) - 0.1).abs() < 1e-6
+    );
+    assert_eq!((ch("R", 0), ch("G", 0), ch("B", 0)), (0.0, 0.0, 0.0));
+    let o = run(isoray()
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&png)
+        .arg("--albedo")
+        .arg(tmp("a.png")));
+    assert_eq!(o.status.code(), Some(2));
+}
