@@ -1,7 +1,7 @@
 //! Primary rays from the scene camera (the convention of `docs/SCENE.md`).
 
 use glam::DVec3;
-use isoray_scene::Camera;
+use isoray_scene::{Camera, Projection};
 
 /// A pinhole camera ready to generate rays for one image size.
 #[derive(Debug, Clone, Copy)]
@@ -14,6 +14,7 @@ pub struct RayCamera {
     aspect: f64,
     width: f64,
     height: f64,
+    projection: Projection,
 }
 
 impl RayCamera {
@@ -32,6 +33,7 @@ impl RayCamera {
             aspect: width as f64 / height as f64,
             width: width as f64,
             height: height as f64,
+            projection: c.projection,
         }
     }
 
@@ -42,7 +44,12 @@ impl RayCamera {
 
     /// The unit direction through image position (x, y) in pixels, where
     /// (i + 0.5, j + 0.5) is the centre of pixel (i, j).
+    /// With the equirectangular projection, (x / width, y / height) is the
+    /// (u, v) of `isoray_scene::env`, in world axes.
     pub fn direction(&self, x: f64, y: f64) -> DVec3 {
+        if self.projection == Projection::Equirect {
+            return DVec3::from(isoray_scene::env::equirect_direction(x / self.width, y / self.height));
+        }
         let ndc_x = x / self.width * 2.0 - 1.0;
         let ndc_y = 1.0 - y / self.height * 2.0;
         (self.forward + ndc_x * self.tan_half * self.aspect * self.right + ndc_y * self.tan_half * self.up).normalize()
@@ -60,6 +67,7 @@ mod tests {
             target: [0.0, 0.0, 0.0],
             up: [0.0, 1.0, 0.0],
             fov: 90.0,
+            projection: Projection::Perspective,
         };
         let rc = RayCamera::new(&cam, 100, 50);
         let d = rc.direction(50.0, 25.0);

@@ -138,7 +138,11 @@ impl Worker<'_> {
                 }
                 for (i, h) in hit.iter().enumerate() {
                     if !h && !packet.media[i].is_inside() {
-                        samples[packet.sample[i] as usize] += packet.weight[i] * background;
+                        let sky = match &ctx.scene.environment {
+                            Some(env) => Vec3::from(env.radiance([self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]])),
+                            None => background,
+                        };
+                        samples[packet.sample[i] as usize] += packet.weight[i] * sky;
                     }
                 }
                 // The Fresnel split at each hit, and the rays it spawns.

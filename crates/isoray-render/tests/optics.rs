@@ -379,3 +379,50 @@ fn area_lights_are_deterministic_across_thread_counts() {
     assert_eq!(a.0.color, b.0.color);
     assert!(a.1.rays.shadow >= 96 * 16 * 64 / 2, "{:?}", a.1.rays);
 }
+
+/// An equirectangular map, red where directions have z > 0 (behind the
+/// default camera), blue where z < 0, written as EXR into a temporary folder.
+fn write_env() -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("isoray-env-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (w, h) = (64u32, 32u32);
+    let mut px = Vec::new();
+    for j in 0..h {
+        for i in 0..w {
+            let d = isoray_scene::env::equirect_direction((i as f64 + 0.5) / w as f64, (j as f64 + 0.5) / h as f64);
+            px.push(if d[2] > 0.0 { [1.0, 0.0, 0.0] } else { [0.0, 0.0, 1.0] });
+        }
+    }
+    let path = dir.join("halves.exr");
+    isoray_render::output::write_exr_rgb(&path, w, h, &px).unwrap();
+    path
+}
+
+#[test]
+fn environment_map_is_the_background_and_is_reflected() {
+    let env = write_env();
+    let text = format!(
+        "[camera]\nposition = [0.0, 0.0, 5.0]\nfov = 30.0\n[render]\nwidth = 32\nheight = 24\nao = false\nshadows = \"none\"\n\
+         [environment]\nimage = {:?}\n\
+         [[light]]\nintensity = 0.0\n\
+         [material.mirror]\nambient = [0.0, 0.0, 0.0]\ndiffuse = [0.0, 0.0, 0.0]\nspecular = [0.0, 0.0, 0.0]\nreflectivity = 1.0\nfresnel = false\n\
+         [[object]]\nmaterial = \"mirror\"\nshape = \"sphere(p, 1.0)\"\n",
+        env.display().to_string()
+    );
+    let scene = load_str(&text, "env.toml", &[]).unwrap();
+    let (img, _) = render(&scene, &RenderOptions::default());
+    // The background, straight ahead (−z), is blue; the mirror's centre reflects
+    // the direction back towards the camera (+z), which is red.
+    let corner = img.color[0];
+    let centre = img.color[(12 * 32 + 16) as usize];
+    assert!(corner[2] > 0.9 && corner[0] < 0.1, "{corner:?}");
+    assert!(centre[0] > 0.9 && centre[2] < 0.1, "{centre:?}");
+    // Errors name the key and the file.
+    let bad = text.replace(&env.display().to_string(), "/no/such/map.hdr");
+    let e = load_str(&bad, "env.toml", &[]).unwrap_err();
+    assert!(
+        e.message.contains("environment.image") && e.message.contains("/no/such/map.hdr"),
+        "{e}"
+    );
+    assert_eq!(e.line, Some(10));
+}

@@ -19,6 +19,7 @@
 //! what was expected; see [`SceneError`].
 
 pub mod doc;
+pub mod env;
 mod error;
 mod load;
 mod model;

@@ -3,6 +3,7 @@
 //! the override) and what was expected.
 
 use std::path::Path;
+use std::sync::Arc;
 
 use isoray_shape::diag::suggest;
 use isoray_shape::surface::{BoundMethod, SurfaceOptions, DEFAULT_DOMAIN};
@@ -10,6 +11,7 @@ use isoray_shape::{Builder, Diagnostic, Library, Shape, Span, SurfaceMode, Value
 use toml::de::{DeTable, DeValue};
 
 use crate::doc::{convert, from_toml, Entry, Item, Located, Origin};
+use crate::env::{EnvMap, Environment, RgbImage};
 use crate::error::{SceneError, Sources};
 use crate::model::*;
 
@@ -41,7 +43,16 @@ pub fn load_str(text: &str, name: &str, overrides: &[String]) -> Result<Scene> {
     build(&src, &root)
 }
 
-const TOP_KEYS: &[&str] = &["camera", "render", "light", "material", "surface", "object", "params"];
+const TOP_KEYS: &[&str] = &[
+    "camera",
+    "render",
+    "light",
+    "material",
+    "surface",
+    "object",
+    "params",
+    "environment",
+];
 
 fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str) -> Result<()> {
     let origin = Origin::Override(index);
@@ -420,9 +431,18 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 .or(r.get("position"))
                 .map(|l| l.origin)
                 .unwrap_or(v.origin);
-            r.finish(&["position", "target", "up", "fov"])?;
+            let projection = r.choice(
+                "projection",
+                &[
+                    ("perspective", Projection::Perspective),
+                    ("equirect", Projection::Equirect),
+                ],
+                Projection::Perspective,
+            )?;
+            r.finish(&["position", "target", "up", "fov", "projection"])?;
             let fwd = sub(target, position);
-            if norm(fwd) < 1e-12 {
+            let perspective = projection == Projection::Perspective;
+            if perspective && norm(fwd) < 1e-12 {
                 return Err(src.error(
                     check_origin,
                     "camera `target` equals `position`: the camera has no direction",
@@ -430,7 +450,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     &[],
                 ));
             }
-            if norm(cross(fwd, up)) < 1e-9 * norm(fwd) * norm(up).max(1e-300) {
+            if perspective && norm(cross(fwd, up)) < 1e-9 * norm(fwd) * norm(up).max(1e-300) {
                 return Err(src.error(
                     check_origin,
                     "camera `up` is parallel to the viewing direction (or zero)",
@@ -443,6 +463,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 target,
                 up,
                 fov,
+                projection,
             }
         }
         None => Camera {
@@ -450,7 +471,14 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
             target: [0.0; 3],
             up: [0.0, 1.0, 0.0],
             fov: 40.0,
+            projection: Projection::Perspective,
         },
+    };
+
+    // [environment]
+    let environment = match top.get("environment") {
+        None => None,
+        Some(v) => Some(environment(src, v, &src.path)?),
     };
 
     // [render]
@@ -993,8 +1021,91 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         shape,
         surfaces,
         shadow,
+        environment,
         library: lib,
         param_ranges,
+    })
+}
+
+/// `[environment]`: an equirectangular `image` or a `cube` of six faces,
+/// with `rotation` (degrees about +y) and `intensity`. Paths are relative to
+/// the scene file's directory.
+fn environment(src: &Sources, v: &Located, scene_name: &str) -> Result<Environment> {
+    let mut r = Reader::new(src, v, "environment")?;
+    let base = Path::new(scene_name)
+        .parent()
+        .filter(|p| p.is_dir())
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    let read = |src: &Sources, loc: &Located, text: &str, key: &str| -> Result<RgbImage> {
+        let path = base.join(text);
+        crate::env::read_image(&path).map_err(|e| {
+            src.error(
+                loc.origin,
+                format!("`environment.{key}`: cannot read `{}`: {e}", path.display()),
+                Some("cannot read this image"),
+                &["environment maps are .hdr, .exr or .png files, relative to the scene file".into()],
+            )
+        })
+    };
+    let image = r.string("image")?;
+    let cube = r.get("cube");
+    let map = match (image, cube) {
+        (Some((text, loc)), None) => EnvMap::Equirect(Arc::new(read(src, loc, text, "image")?)),
+        (None, Some(cv)) => {
+            let mut c = Reader::new(src, cv, "environment.cube")?;
+            let mut faces = Vec::new();
+            for key in ["px", "nx", "py", "ny", "pz", "nz"] {
+                let Some((text, loc)) = c.string(key)? else {
+                    return Err(src.error(
+                        cv.origin,
+                        format!("`environment.cube` needs `{key}`: the six faces px, nx, py, ny, pz, nz"),
+                        Some(&format!("missing `{key}`")),
+                        &[],
+                    ));
+                };
+                let img = read(src, loc, text, &format!("cube.{key}"))?;
+                if img.width != img.height || faces.first().is_some_and(|f: &RgbImage| f.width != img.width) {
+                    return Err(src.error(
+                        loc.origin,
+                        format!(
+                            "`environment.cube.{key}` is {}x{}: cube faces must be square and all the same size",
+                            img.width, img.height
+                        ),
+                        Some("wrong size"),
+                        &[],
+                    ));
+                }
+                faces.push(img);
+            }
+            c.finish(&["px", "nx", "py", "ny", "pz", "nz"])?;
+            let faces: [RgbImage; 6] = faces.try_into().expect("six faces");
+            EnvMap::Cube(Arc::new(faces))
+        }
+        (Some(_), Some(cv)) => {
+            return Err(src.error(
+                cv.origin,
+                "`environment` has both `image` and `cube`: give one",
+                Some("remove one of them"),
+                &[],
+            ))
+        }
+        (None, None) => {
+            return Err(src.error(
+                v.origin,
+                "`environment` needs an equirectangular `image` or a `cube` of six faces",
+                Some("add image = \"sky.hdr\""),
+                &[],
+            ))
+        }
+    };
+    let rotation = r.num_in("rotation", 0.0, f64::is_finite, "an angle in degrees")?;
+    let intensity = r.non_negative("intensity", 1.0)?;
+    r.finish(&["image", "cube", "rotation", "intensity"])?;
+    Ok(Environment {
+        map,
+        rotation,
+        intensity,
     })
 }
 

@@ -23,6 +23,20 @@ pub struct Camera {
     pub up: Vec3,
     /// Vertical field of view in degrees (default 40).
     pub fov: f64,
+    /// How directions map to pixels (default perspective).
+    pub projection: Projection,
+}
+
+/// How a camera maps directions to pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Projection {
+    /// A pinhole camera with the vertical field of view `fov`.
+    #[default]
+    Perspective,
+    /// Every direction, as an equirectangular environment map
+    /// ([`crate::env`]) seen from the camera position in the world axes
+    /// (`target` and `up` are not used); for images 2:1 wide.
+    Equirect,
 }
 
 /// Normal estimation for shading.
@@ -321,6 +335,8 @@ pub struct Scene {
     /// When some object is transparent, what shadow rays trace: None when
     /// every object is opaque (shadow rays then trace `shape`).
     pub shadow: Option<ShadowShapes>,
+    /// What rays leaving the scene see (None: `render.background`).
+    pub environment: Option<crate::env::Environment>,
     /// The scene's parameters and user surfaces, with their cached analyses.
     pub library: Library,
     /// Ranges declared for number parameters (for sliders), in file order.
