@@ -215,3 +215,56 @@ fn implicit_surfaces() {
     let e = err("[surface.s]\nimplicit = \"x^2 + w^2 - 1.0\"\n[[object]]\nshape = \"s(p)\"\n");
     assert!(e.message.contains("unknown name `w`"), "{e}");
 }
+
+#[test]
+fn cube_environment_maps_load_and_look_up_their_faces() {
+    let dir = std::env::temp_dir().join(format!("isoray-cube-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let colours = [
+        [255u8, 0, 0],
+        [0, 255, 0],
+        [0, 0, 255],
+        [255, 255, 0],
+        [0, 255, 255],
+        [255, 0, 255],
+    ];
+    let names = ["px", "nx", "py", "ny", "pz", "nz"];
+    for (name, c) in names.iter().zip(colours) {
+        let img = image::RgbImage::from_pixel(4, 4, image::Rgb(c));
+        img.save(dir.join(format!("{name}.png"))).unwrap();
+    }
+    image::RgbImage::from_pixel(4, 2, image::Rgb([0, 0, 0]))
+        .save(dir.join("wide.png"))
+        .unwrap();
+    let faces: Vec<String> = names.iter().map(|n| format!("{n} = \"{n}.png\"")).collect();
+    let text = format!(
+        "[environment]\ncube = {{ {} }}\nintensity = 2.0\n[[object]]\nshape = \"sphere(p, 1.0)\"\n",
+        faces.join(", ")
+    );
+    let path = dir.join("cube.toml");
+    std::fs::write(&path, &text).unwrap();
+    let s = isoray_scene::load(&path, &[]).unwrap();
+    let env = s.environment.as_ref().unwrap();
+    let dirs = [
+        [1.0f32, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+    ];
+    for (d, c) in dirs.iter().zip(colours) {
+        let want = c.map(|x| if x == 255 { 2.0f32 } else { 0.0 });
+        assert_eq!(env.radiance(*d), want, "{d:?}");
+    }
+    // Faces must be square and of one size.
+    std::fs::write(&path, text.replace("nz = \"nz.png\"", "nz = \"wide.png\"")).unwrap();
+    let e = isoray_scene::load(&path, &[]).unwrap_err();
+    assert!(
+        e.message.contains("environment.cube.nz") && e.message.contains("square"),
+        "{e}"
+    );
+    std::fs::write(&path, text.replace("py = \"py.png\", ", "")).unwrap();
+    let e = isoray_scene::load(&path, &[]).unwrap_err();
+    assert!(e.message.contains("needs `py`"), "{e}");
+}
