@@ -426,3 +426,75 @@ fn environment_map_is_the_background_and_is_reflected() {
     );
     assert_eq!(e.line, Some(10));
 }
+
+const NESTED: &str = r#"
+[camera]
+position = [0.0, 0.3, 6.0]
+target = [0.0, 0.0, 0.0]
+fov = 30.0
+[render]
+width = 48
+height = 36
+shadows = "none"
+ao = false
+background = [0.5, 0.5, 0.5]
+[[light]]
+intensity = 0.0
+[material.block]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+transparency = 1.0
+ior = 1.5
+fresnel = false
+[material.inner]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+transparency = 1.0
+ior = 1.5
+fresnel = false
+[material.lamp]
+emission = [1.0, 0.2, 0.1]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+[material.stripe]
+emission = [0.0, 1.0, 0.0]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+[[object]]
+material = "block"
+shape = "box(p, vec3(1.2, 1.0, 1.0))"
+[[object]]
+material = "stripe"
+shape = "box(p - vec3(0.0, 0.5, -4.0), vec3(10.0, 0.3, 0.1))"
+"#;
+
+#[test]
+fn nested_objects_keep_track_of_the_medium() {
+    let render_text = |extra: &str| {
+        let scene = load_str(&format!("{NESTED}{extra}"), "n.toml", &[]).unwrap();
+        render(&scene, &RenderOptions::default()).0.color
+    };
+    let plain = render_text("");
+    // A glass sphere of the same index inside the block changes nothing: the
+    // ray enters it and leaves it back into the block, not into air.
+    let same = render_text("[[object]]\nmaterial = \"inner\"\nshape = \"sphere(p, 0.6)\"\n");
+    let differing = plain
+        .iter()
+        .zip(&same)
+        .filter(|(a, b)| (a[0] - b[0]).abs() + (a[1] - b[1]).abs() + (a[2] - b[2]).abs() > 0.05)
+        .count();
+    assert!(differing <= 10, "{differing} pixels differ");
+    // An opaque lamp inside the block is seen through it.
+    let lamp = render_text("[[object]]\nmaterial = \"lamp\"\nshape = \"sphere(p, 0.4)\"\n");
+    let centre = lamp[(18 * 48 + 24) as usize];
+    assert!(
+        (centre[0] - 1.0).abs() < 0.05 && (centre[1] - 0.2).abs() < 0.05,
+        "{centre:?}"
+    );
+    // And some of the stripe behind the block is seen through the glass.
+    assert!(plain.iter().any(|c| c[1] > 0.9 && c[0] < 0.1));
+}
