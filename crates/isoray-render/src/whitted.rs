@@ -71,14 +71,17 @@ struct Packet {
     sample: Vec<u32>,
     weight: Vec<Vec3>,
     media: Vec<Media>,
+    /// The surface point each ray left (its origin is offset from it).
+    from: Vec<Vec3>,
 }
 
 impl Packet {
-    fn push(&mut self, o: Vec3, d: Vec3, sample: u32, weight: Vec3, media: Media) {
+    fn push(&mut self, o: Vec3, d: Vec3, sample: u32, weight: Vec3, media: Media, from: Vec3) {
         self.rays.push(o.to_array(), d.to_array());
         self.sample.push(sample);
         self.weight.push(weight);
         self.media.push(media);
+        self.from.push(from);
     }
 }
 
@@ -101,6 +104,7 @@ impl Worker<'_> {
             sample: (0..n as u32).collect(),
             weight: vec![Vec3::ONE; n],
             media: vec![Media::default(); n],
+            from: Vec::new(),
         };
         let mut generation = vec![(primary, Some(hs))];
         let eps = s.hit_epsilon as f32;
@@ -121,13 +125,15 @@ impl Worker<'_> {
                         hs
                     }
                 };
-                // Beer–Lambert over the segment just travelled inside an object.
+                // Beer–Lambert over the segment just travelled inside an object,
+                // from the surface point the ray left to the one it reached.
                 let (surfaces, objects) = self.materials(ctx, &hs, &mut evals, inside);
                 if inside {
-                    for &i in &hs.idx {
+                    for (k, &i) in hs.idx.iter().enumerate() {
                         if let Some(o) = packet.media[i].top() {
                             let sigma = ctx.surfaces[o].absorption;
-                            packet.weight[i] *= (-sigma * self.hits[i].t).exp();
+                            let length = (Vec3::new(hs.px[k], hs.py[k], hs.pz[k]) - packet.from[i]).length();
+                            packet.weight[i] *= (-sigma * length).exp();
                         }
                     }
                 }
@@ -190,14 +196,14 @@ impl Worker<'_> {
                     let wr = w * sp.reflect;
                     if wr.max_element() >= s.min_weight as f32 {
                         let target = if media.is_inside() { &mut next_in } else { &mut next_out };
-                        target.push(p + nrm * off, reflect(d, nrm), packet.sample[i], wr, media);
+                        target.push(p + nrm * off, reflect(d, nrm), packet.sample[i], wr, media, p);
                         self.counts.reflected += 1;
                     }
                     if let Some(t) = transmitted {
                         let wt = w * sp.transmit;
                         if wt.max_element() >= s.min_weight as f32 {
                             let target = if after.is_inside() { &mut next_in } else { &mut next_out };
-                            target.push(p - nrm * off, t, packet.sample[i], wt, after);
+                            target.push(p - nrm * off, t, packet.sample[i], wt, after, p);
                             self.counts.refracted += 1;
                         }
                     }
@@ -286,7 +292,8 @@ impl Worker<'_> {
                 let objs = self.nearest_objects(ctx, &pts, &mut evals);
                 for ((i, p, t), obj) in pts.into_iter().zip(objs) {
                     if let Some(top) = media[i].top() {
-                        out[i] *= (-ctx.surfaces[top].absorption * t).exp();
+                        // The segment began `off` before the traced origin (the step past the interface).
+                        out[i] *= (-ctx.surfaces[top].absorption * (t + off)).exp();
                     }
                     if media[i].contains(obj) {
                         media[i].remove(obj);

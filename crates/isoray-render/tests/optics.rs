@@ -498,3 +498,41 @@ fn nested_objects_keep_track_of_the_medium() {
     // And some of the stripe behind the block is seen through the glass.
     assert!(plain.iter().any(|c| c[1] > 0.9 && c[0] < 0.1));
 }
+
+#[test]
+fn thin_glass_shells_are_crossed_wall_by_wall() {
+    // A shell 0.005 thick (onion of a sphere): a ray through the centre
+    // crosses two walls, 0.01 of glass in all, and keeps exp(−50 · 0.01) of
+    // its red. Skipping a wall (tunnelling) or re-finding a wall just left
+    // would change that.
+    let text = r#"
+[camera]
+position = [0.0, 0.0, 5.0]
+fov = 20.0
+[render]
+width = 9
+height = 9
+shadows = "none"
+ao = false
+background = [1.0, 1.0, 1.0]
+[[light]]
+intensity = 0.0
+[material.shell]
+ambient = [0.0, 0.0, 0.0]
+diffuse = [0.0, 0.0, 0.0]
+specular = [0.0, 0.0, 0.0]
+transparency = 1.0
+ior = 1.0
+fresnel = false
+absorption = [50.0, 0.0, 0.0]
+[[object]]
+material = "shell"
+shape = "onion(sphere(p, 1.0), 0.0025)"
+"#;
+    let scene = load_str(text, "shell.toml", &[]).unwrap();
+    let (img, stats) = render(&scene, &RenderOptions::default());
+    let centre = img.color[4 * 9 + 4];
+    assert!((centre[0] - (-0.5f32).exp()).abs() < 0.02, "{centre:?}");
+    assert!((centre[1] - 1.0).abs() < 1e-3, "{centre:?}");
+    assert!(stats.rays.refracted >= 4 * 9, "{:?}", stats.rays);
+}
