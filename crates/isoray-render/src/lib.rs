@@ -552,7 +552,9 @@ impl<'s> Worker<'s> {
                 &mut self.scratch,
                 &mut vis,
             );
-            self.counts.shadow += shadow_rays.len() as u64;
+            if mode != ShadowMode::None {
+                self.counts.shadow += shadow_rays.len() as u64;
+            }
             for (r, &k) in which.iter().enumerate() {
                 let i = hs.idx[k];
                 let v = -Vec3::new(self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]);
