@@ -71,28 +71,26 @@ camera {
 light_source { <-4, 6, -5> color rgb 1 }   // z mirrored
 
 // ----------------------------------------------------------------- floor
-// isoray: 1x1 tiles (boxes 0.1 thick, top at y = 0) centred on the integer
-// points (x, z), light where x + z is even.  POV's checker has its cell
-// boundaries on the integers and takes its first texture where
-// floor(x) + floor(y) + floor(z) is even.  Translated by 0.5 in x and z, the
-// boundaries fall on the half-integers like isoray's; translated by -0.5 in y,
-// the plane y = 0 lies in the middle of a cell layer (no flicker between
-// layers) and the tile around the origin has floor(-0.5) + floor(0.5) +
-// floor(-0.5) = -2, even: light, as in isoray.  Mirroring z keeps the pattern
-// (x + z and x - z have the same parity).
+// isoray: a plane with a checker material, cells [k, k+1) in x and z, light
+// where floor(x) + floor(z) is even.  POV's checker has its cell boundaries on
+// the integers too and takes its first texture where floor(x) + floor(y) +
+// floor(z) is even.  Translated by -0.5 in y, the plane y = 0 lies in the
+// middle of a cell layer (no flicker between layers).  Mirroring z
+// (z_pov = -z) flips the parity: floor(-z) = -floor(z) - 1 off the integers,
+// so the dark texture comes first.
 plane {
   y, 0
   texture {
     checker
-      texture {   // isoray light_tile: ambient 0.2, diffuse 0.8, no specular
-        pigment { color rgb 0.8 }
-        finish { ambient 0.25 diffuse 1 specular 0 phong 0 }
-      }
       texture {   // isoray dark_tile: ambient [0.03,0.03,0.04], diffuse [0.1,0.1,0.12]
         pigment { color rgb <0.1, 0.1, 0.12> }
         finish { ambient rgb <0.3, 0.3, 1/3> diffuse 1 specular 0 phong 0 }
       }
-    translate <0.5, -0.5, 0.5>
+      texture {   // isoray light_tile: ambient 0.2, diffuse 0.8, no specular
+        pigment { color rgb 0.8 }
+        finish { ambient 0.25 diffuse 1 specular 0 phong 0 }
+      }
+    translate <0, -0.5, 0>
   }
   clipped_by { sphere { ISO_EYE, 100 } }   // isoray render.max_distance
 }

@@ -211,6 +211,8 @@ struct Ctx<'s> {
     scene: &'s Scene,
     cam: RayCamera,
     surfaces: Vec<Surface>,
+    /// Every material as a surface, by material index (for checkers).
+    material_surfaces: Vec<Surface>,
     gradient: GradientMode,
 }
 
@@ -228,10 +230,12 @@ impl<'s> Ctx<'s> {
             .iter()
             .map(|o| Surface::from(&scene.materials[o.material]))
             .collect();
+        let material_surfaces = scene.materials.iter().map(Surface::from).collect();
         Ctx {
             scene,
             cam,
             surfaces,
+            material_surfaces,
             gradient,
         }
     }
@@ -577,7 +581,10 @@ impl<'s> Worker<'s> {
     fn materials(&mut self, ctx: &Ctx, hs: &HitSet, evals: &mut u64, unsigned: bool) -> (Vec<Surface>, Vec<usize>) {
         let m = hs.idx.len();
         if self.object_evals.is_empty() {
-            return (vec![ctx.surfaces[0]; m], vec![0; m]);
+            let obj = vec![0; m];
+            let mut out = vec![ctx.surfaces[0]; m];
+            self.apply_checkers(ctx, hs, &obj, &mut out);
+            return (out, obj);
         }
         let k = if unsigned { 0.0 } else { ctx.scene.render.blend as f32 };
         let km = k * ctx.scene.render.material_blend as f32;
@@ -614,7 +621,23 @@ impl<'s> Worker<'s> {
                 }
             }
         }
+        self.apply_checkers(ctx, hs, &obj, &mut out);
         (out, obj)
+    }
+
+    /// Objects whose material is a checker take the other material in odd cells.
+    fn apply_checkers(&self, ctx: &Ctx, hs: &HitSet, obj: &[usize], out: &mut [Surface]) {
+        let scene = ctx.scene;
+        for (q, &o) in obj.iter().enumerate() {
+            let Some((other, size)) = scene.materials[scene.objects[o].material].checker else {
+                continue;
+            };
+            let inv = 1.0 / size as f32;
+            let cell = (hs.px[q] * inv).floor() + (hs.py[q] * inv).floor() + (hs.pz[q] * inv).floor();
+            if (cell as i64).rem_euclid(2) == 1 {
+                out[q] = ctx.material_surfaces[other];
+            }
+        }
     }
 
     /// Ambient occlusion by sampling the distance along the normal:

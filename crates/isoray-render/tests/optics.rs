@@ -536,3 +536,51 @@ shape = "onion(sphere(p, 1.0), 0.0025)"
     assert!((centre[1] - 1.0).abs() < 1e-3, "{centre:?}");
     assert!(stats.rays.refracted >= 4 * 9, "{:?}", stats.rays);
 }
+
+#[test]
+fn checker_materials_alternate_by_cell() {
+    // The mirror scene with a plane whose material is a checker instead of
+    // tiles: the cells are [k, k + 1) in x and z (y ≈ 0 on the floor).
+    let text = CHECKER
+        .split("[[object]]")
+        .next()
+        .unwrap()
+        .replace("[material.white]\n", "[material.white]\nchecker = \"black\"\n")
+        + "[[object]]\nmaterial = \"white\"\nshape = \"plane(p, vec3(0.0, 1.0, 0.0), 0.0)\"\n";
+    let scene = load_str(&text, "checker.toml", &[]).unwrap();
+    let (img, _) = render(&scene, &RenderOptions::default());
+    let cam = RayCamera::new(&scene.camera, W, H);
+    let o = cam.origin();
+    let (mut white, mut black) = (0, 0);
+    for j in 0..H {
+        for i in 0..W {
+            let d = cam.direction(i as f64 + 0.5, j as f64 + 0.5);
+            if d.y >= -0.05 {
+                continue;
+            }
+            let q = o + d * (-o.y / d.y);
+            let (fx, fz) = (q.x - q.x.floor(), q.z - q.z.floor());
+            if [fx, 1.0 - fx, fz, 1.0 - fz].into_iter().fold(1.0, f64::min) < 0.1 || (q - o).length() > 10.0 {
+                continue;
+            }
+            let odd = (q.x.floor() as i64 + q.z.floor() as i64).rem_euclid(2) == 1;
+            let got = img.color[(j * W + i) as usize][0];
+            if odd {
+                black += 1;
+                assert!(got < 0.05, "({i}, {j}) at {q}: {got}");
+            } else {
+                white += 1;
+                assert!(got > 0.95, "({i}, {j}) at {q}: {got}");
+            }
+        }
+    }
+    assert!(white > 50 && black > 50, "{white} {black}");
+    // The other material must exist.
+    let e = load_str(
+        &text.replace("checker = \"black\"", "checker = \"blak\""),
+        "c.toml",
+        &[],
+    )
+    .unwrap_err();
+    assert!(e.message.contains("no material named \"blak\""), "{e}");
+}

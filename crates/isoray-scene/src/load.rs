@@ -661,6 +661,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
     }
 
     // [material.NAME]
+    let mut pending_checkers: Vec<(String, String, &Located, f64)> = Vec::new();
     let mut materials = vec![Material::default_named("default")];
     if let Some(v) = top.get("material") {
         let Item::Table(entries) = &v.item else {
@@ -709,13 +710,32 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 )?,
                 absorption: r.color("absorption", d.absorption)?,
                 fresnel: fresnel_setting(&mut r, d.fresnel)?,
+                checker: None,
             };
+            let checker_size = r.positive("checker_size", 1.0)?;
+            if let Some((other, loc)) = r.string("checker")? {
+                pending_checkers.push((e.key.clone(), other.to_string(), loc, checker_size));
+            } else if let Some(v) = r.get("checker_size") {
+                return Err(src.error(
+                    v.origin,
+                    format!("`material.{}.checker_size` needs `checker`", e.key),
+                    Some("no checker"),
+                    &["add checker = \"OTHER_MATERIAL\"".into()],
+                ));
+            }
             r.finish(MATERIAL_KEYS)?;
             if let Some(slot) = materials.iter_mut().find(|x| x.name == m.name) {
                 *slot = m;
             } else {
                 materials.push(m);
             }
+        }
+    }
+    // Checkers name other materials, defined before or after.
+    for (name, other, loc, size) in pending_checkers {
+        let k = material_index(src, &materials, &other, loc, &format!("material.{name}.checker"))?;
+        if let Some(m) = materials.iter_mut().find(|x| x.name == name) {
+            m.checker = Some((k, size));
         }
     }
 
@@ -1124,6 +1144,8 @@ pub const MATERIAL_KEYS: &[&str] = &[
     "absorption",
     "fresnel",
     "fresnel_model",
+    "checker",
+    "checker_size",
 ];
 
 /// `fresnel = true | false` and `fresnel_model = "schlick" | "exact"`.

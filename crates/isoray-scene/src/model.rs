@@ -260,6 +260,9 @@ pub struct Material {
     pub absorption: Vec3,
     /// Fresnel weighting of reflection against refraction (default: on, Schlick).
     pub fresnel: Fresnel,
+    /// A 3D checker: (index of the other material, cell size). Where
+    /// ⌊x/s⌋ + ⌊y/s⌋ + ⌊z/s⌋ is odd, the other material is used.
+    pub checker: Option<(usize, f64)>,
 }
 
 /// How reflection and refraction are weighted at a surface.
@@ -295,6 +298,7 @@ impl Material {
             ior: 1.5,
             absorption: [0.0; 3],
             fresnel: Fresnel::Schlick,
+            checker: None,
         }
     }
 }
