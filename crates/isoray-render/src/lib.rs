@@ -535,13 +535,6 @@ impl<'s> Worker<'s> {
             }
             // With transparent objects, opaque ones occlude (with the penumbra
             // estimate) and transparent ones transmit, traced separately.
-            let transmitted = if self.shadow_evals.is_some() && s.shadows != ShadowMode::None {
-                let (t, e) = self.transmission(ctx, &origins, &ldirs, &tmax, &start);
-                *evals += e;
-                Some(t)
-            } else {
-                None
-            };
             let occluders = match &mut self.shadow_evals {
                 Some(se) => &mut se.opaque,
                 None => &mut self.scene_eval,
@@ -556,6 +549,22 @@ impl<'s> Worker<'s> {
                 &mut self.scratch,
                 &mut vis,
             );
+            // Transparent objects transmit along the rays the opaque ones let through.
+            let transmitted = if self.shadow_evals.is_some() && s.shadows != ShadowMode::None {
+                let open: Vec<usize> = (0..vis.len()).filter(|&r| vis[r] > 0.0).collect();
+                let pick = |v: &[Vec3]| open.iter().map(|&r| v[r]).collect::<Vec<Vec3>>();
+                let tm: Vec<f32> = open.iter().map(|&r| tmax[r]).collect();
+                let st: Vec<whitted::Media> = open.iter().map(|&r| start[r]).collect();
+                let (t, e) = self.transmission(ctx, &pick(&origins), &pick(&ldirs), &tm, &st);
+                *evals += e;
+                let mut all = vec![Vec3::ZERO; vis.len()];
+                for (&r, v) in open.iter().zip(t) {
+                    all[r] = v;
+                }
+                Some(all)
+            } else {
+                None
+            };
             if mode != ShadowMode::None {
                 self.counts.shadow += shadow_rays.len() as u64;
             }
