@@ -44,7 +44,7 @@ use rayon::prelude::*;
 
 use camera::RayCamera;
 use shade::Surface;
-use trace::{shadow_march, sphere_trace, Hit, Rays, Scratch};
+use trace::{shadow_march, sphere_trace, sphere_trace_capped, Hit, Rays, Scratch};
 
 /// Tile edge in pixels.
 pub const TILE: u32 = 16;
@@ -248,6 +248,10 @@ struct Worker<'s> {
     surf_eval: BatchEvaluator<'s, f32>,
     /// What shadow rays trace when some object is transparent.
     shadow_evals: Option<whitted::ShadowEvals<'s>>,
+    /// The union of the objects that are not planes or spheres (those are
+    /// intersected in closed form), when some are.
+    rest_eval: Option<BatchEvaluator<'s, f32>>,
+    caps: Vec<f32>,
     /// Rays traced, by kind (summed over tiles).
     counts: RayCounts,
     /// The current tile's top-left pixel (seeds the light samples).
@@ -286,6 +290,8 @@ impl<'s> Worker<'s> {
             scene_eval: BatchEvaluator::new(ctx.scene.shape.tape()),
             surf_eval: BatchEvaluator::new(ctx.scene.surfaces.tape()),
             counts: RayCounts::default(),
+            rest_eval: ctx.scene.rest.as_ref().map(|r| BatchEvaluator::new(r.tape())),
+            caps: Vec::new(),
             tile_origin: (0, 0),
             shadow_evals: ctx.scene.shadow.as_ref().map(|sh| whitted::ShadowEvals {
                 opaque: BatchEvaluator::new(sh.opaque.tape()),
@@ -303,12 +309,33 @@ impl<'s> Worker<'s> {
     /// `inside` objects trace the unsigned distance to the nearest surface.
     fn trace_and_normals(&mut self, ctx: &Ctx, inside: bool) -> (HitSet, u64) {
         let s = &ctx.scene.render;
-        let ev = if inside {
-            &mut self.surf_eval
-        } else {
-            &mut self.scene_eval
+        let mut evals = match (&mut self.rest_eval, inside) {
+            (Some(rest), false) => {
+                // Planes and spheres in closed form; the other objects marched up to them.
+                self.caps.clear();
+                for i in 0..self.rays.len() {
+                    let o = [self.rays.ox[i], self.rays.oy[i], self.rays.oz[i]];
+                    let d = [self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]];
+                    let t = ctx
+                        .scene
+                        .analytic
+                        .iter()
+                        .flatten()
+                        .map(|a| a.intersect(o, d)[0])
+                        .fold(f32::INFINITY, f32::min);
+                    self.caps.push(t);
+                }
+                sphere_trace_capped(rest, &self.rays, s, &mut self.scratch, &mut self.hits, Some(&self.caps))
+            }
+            _ => {
+                let ev = if inside {
+                    &mut self.surf_eval
+                } else {
+                    &mut self.scene_eval
+                };
+                sphere_trace(ev, &self.rays, s, &mut self.scratch, &mut self.hits)
+            }
         };
-        let mut evals = sphere_trace(ev, &self.rays, s, &mut self.scratch, &mut self.hits);
         let mut hs = HitSet::default();
         for (i, h) in self.hits.iter().enumerate() {
             if h.t.is_finite() {

@@ -111,6 +111,20 @@ pub fn sphere_trace(
     scratch: &mut Scratch,
     hits: &mut Vec<Hit>,
 ) -> u64 {
+    sphere_trace_capped(eval, rays, s, scratch, hits, None)
+}
+
+/// Sphere-traces every ray of the packet, ray i stopping at `caps[i]` (a
+/// surface found in closed form there: the ray hits it unless the march
+/// finds one before). Returns the number of distance evaluations.
+pub fn sphere_trace_capped(
+    eval: &mut BatchEvaluator<f32>,
+    rays: &Rays,
+    s: &RenderSettings,
+    scratch: &mut Scratch,
+    hits: &mut Vec<Hit>,
+    caps: Option<&[f32]>,
+) -> u64 {
     let n = rays.len();
     hits.clear();
     hits.resize(n, Hit { t: 0.0, steps: 0 });
@@ -148,7 +162,12 @@ pub fn sphere_trace(
                 continue;
             }
             h.t += d * scale;
-            if h.t > tmax {
+            let cap = caps.map_or(f32::INFINITY, |c| c[i as usize]);
+            if h.t >= cap && cap <= tmax {
+                // The closed-form surface comes first; stop just outside it,
+                // as a marched hit would (within the hit epsilon).
+                h.t = (cap - 0.5 * eps).max(0.0);
+            } else if h.t > tmax {
                 h.t = f32::INFINITY;
             } else if step < s.max_steps {
                 scratch.next.push(i);

@@ -18,6 +18,7 @@
 //! Errors name the file, line and column (or the `--set` override) and say
 //! what was expected; see [`SceneError`].
 
+pub mod analytic;
 pub mod doc;
 pub mod env;
 mod error;

@@ -553,6 +553,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     |x| (0.0..1.0).contains(&x),
                     "a number from 0 to below 1",
                 )?,
+                analytic: r.boolean("analytic", d.analytic)?,
             };
             r.finish(RENDER_KEYS)?;
             s
@@ -1031,6 +1032,31 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
     } else {
         None
     };
+    // Planes and spheres are intersected in closed form; the rest is marched.
+    let analytic: Vec<Option<crate::analytic::Analytic>> =
+        if render.blend == 0.0 && render.analytic && render.view != View::Steps {
+            objects
+                .iter()
+                .map(|o| crate::analytic::Analytic::recognise(&o.shape))
+                .collect()
+        } else {
+            vec![None; objects.len()]
+        };
+    let rest = if analytic.iter().any(Option::is_some) {
+        let mut acc: Option<isoray_shape::Node> = None;
+        for (&n, a) in nodes.iter().zip(&analytic) {
+            if a.is_none() {
+                acc = Some(match acc {
+                    None => n,
+                    Some(x) => builder.min(x, n),
+                });
+            }
+        }
+        let root = acc.unwrap_or_else(|| builder.constant(1e9));
+        Some(Shape::from_tape(builder.tape(root)))
+    } else {
+        None
+    };
     Ok(Scene {
         camera,
         render,
@@ -1042,6 +1068,8 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         surfaces,
         shadow,
         environment,
+        analytic,
+        rest,
         library: lib,
         param_ranges,
     })
@@ -1289,6 +1317,7 @@ pub const RENDER_KEYS: &[&str] = &[
     "view",
     "max_depth",
     "min_weight",
+    "analytic",
 ];
 
 /// min(a,b) − max(k−|a−b|,0)²/(4k), or min(a, b) when k = 0.

@@ -130,6 +130,9 @@ pub struct RenderSettings {
     pub max_depth: u32,
     /// Secondary rays whose weight (largest channel) falls below this stop (default 0.001).
     pub min_weight: f64,
+    /// Intersect objects that are exactly planes or spheres in closed form
+    /// (default true; not with `blend` > 0 or the steps view).
+    pub analytic: bool,
 }
 
 impl Default for RenderSettings {
@@ -159,6 +162,7 @@ impl Default for RenderSettings {
             material_blend: 0.3,
             max_depth: 5,
             min_weight: 1e-3,
+            analytic: true,
             view: View::Shaded,
         }
     }
@@ -341,6 +345,12 @@ pub struct Scene {
     pub shadow: Option<ShadowShapes>,
     /// What rays leaving the scene see (None: `render.background`).
     pub environment: Option<crate::env::Environment>,
+    /// Per object, its closed form when it is exactly a plane or a sphere
+    /// (recognised only when `render.blend` = 0).
+    pub analytic: Vec<Option<crate::analytic::Analytic>>,
+    /// When some object is analytic: the union of the others, which rays
+    /// outside objects march while the analytic ones are intersected.
+    pub rest: Option<Shape>,
     /// The scene's parameters and user surfaces, with their cached analyses.
     pub library: Library,
     /// Ranges declared for number parameters (for sliders), in file order.
