@@ -54,7 +54,7 @@ add_case() { NAMES+=("$1"); SETTINGS+=("$2"); CMDS+=("$3"); }
 ISO_BASE="$ISORAY render bench/optics.toml -o {OUT} --width $W --height $H"
 add_case "POV-Ray 3.7" "native spheres + plane, isosurface torus, depth 5, hard shadows, no AA, 2 threads" \
   "povray +Ibench/optics.pov +O{OUT} +W$W +H$H -A +WT2 -D -V +FN"
-add_case "isoray" "all SDFs, floor = plane with a checker material, depth 5, hard shadows, no AO, aa 1 (same work as POV)" \
+add_case "isoray" "SDF scene (plane and spheres recognised and intersected in closed form, torus sphere-traced), checker material, depth 5, hard shadows, no AO, aa 1 (same work as POV)" \
   "$ISO_BASE"
 
 now() { date +%s.%N; }
