@@ -53,6 +53,16 @@ pub enum EnvMap {
     Equirect(Arc<RgbImage>),
     /// Six square faces: +x, −x, +y, −y, +z, −z.
     Cube(Arc<[RgbImage; 6]>),
+    /// A sky gradient: `horizon` at y = 0, blending linearly in the height y
+    /// of the direction to `zenith` straight up and to `nadir` straight down.
+    Gradient {
+        /// Straight up.
+        zenith: [f32; 3],
+        /// At the horizon.
+        horizon: [f32; 3],
+        /// Straight down.
+        nadir: [f32; 3],
+    },
 }
 
 /// The environment of a scene (`[environment]`).
@@ -121,6 +131,11 @@ impl Environment {
             EnvMap::Cube(faces) => {
                 let (f, u, v) = cube_uv(d);
                 faces[f].bilinear(u.clamp(0.0, 1.0), v)
+            }
+            EnvMap::Gradient { zenith, horizon, nadir } => {
+                let (to, w) = if d[1] >= 0.0 { (zenith, d[1]) } else { (nadir, -d[1]) };
+                let w = w.clamp(0.0, 1.0);
+                std::array::from_fn(|k| horizon[k] + (to[k] - horizon[k]) * w)
             }
         };
         rgb.map(|x| x * k)
@@ -202,6 +217,24 @@ mod tests {
         assert!((ahead[2] + 1.0).abs() < 1e-12);
         assert!((equirect_direction(0.75, 0.5)[0] - 1.0).abs() < 1e-12);
         assert!((equirect_direction(0.3, 0.0)[1] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn gradient_sky_blends_by_height() {
+        let env = Environment {
+            map: EnvMap::Gradient {
+                zenith: [0.0, 0.0, 1.0],
+                horizon: [1.0, 1.0, 1.0],
+                nadir: [0.0, 0.0, 0.0],
+            },
+            rotation: 45.0,
+            intensity: 1.0,
+        };
+        assert_eq!(env.radiance([0.0, 1.0, 0.0]), [0.0, 0.0, 1.0]);
+        assert_eq!(env.radiance([1.0, 0.0, 0.0]), [1.0, 1.0, 1.0]);
+        assert_eq!(env.radiance([0.0, -1.0, 0.0]), [0.0, 0.0, 0.0]);
+        let half = env.radiance([0.0, 0.5, 0.866]);
+        assert!((half[0] - 0.5).abs() < 1e-6 && (half[2] - 1.0).abs() < 1e-6, "{half:?}");
     }
 
     #[test]

@@ -1098,6 +1098,32 @@ fn environment(src: &Sources, v: &Located, scene_name: &str) -> Result<Environme
     };
     let image = r.string("image")?;
     let cube = r.get("cube");
+    if let Some(gv) = r.get("gradient") {
+        if let Some(other) = image.map(|x| x.1).or(cube) {
+            return Err(src.error(
+                other.origin,
+                "`environment` has a `gradient` and an image: give one",
+                Some("remove one of them"),
+                &[],
+            ));
+        }
+        let mut g = Reader::new(src, gv, "environment.gradient")?;
+        let f = |c: Vec3| c.map(|x| x as f32);
+        let map = EnvMap::Gradient {
+            zenith: f(g.color("zenith", [0.35, 0.5, 0.8])?),
+            horizon: f(g.color("horizon", [0.85, 0.88, 0.93])?),
+            nadir: f(g.color("nadir", [0.3, 0.3, 0.32])?),
+        };
+        g.finish(&["zenith", "horizon", "nadir"])?;
+        let rotation = r.num_in("rotation", 0.0, f64::is_finite, "an angle in degrees")?;
+        let intensity = r.non_negative("intensity", 1.0)?;
+        r.finish(&["image", "cube", "gradient", "rotation", "intensity"])?;
+        return Ok(Environment {
+            map,
+            rotation,
+            intensity,
+        });
+    }
     let map = match (image, cube) {
         (Some((text, loc)), None) => EnvMap::Equirect(Arc::new(read(src, loc, text, "image")?)),
         (None, Some(cv)) => {
@@ -1141,15 +1167,15 @@ fn environment(src: &Sources, v: &Located, scene_name: &str) -> Result<Environme
         (None, None) => {
             return Err(src.error(
                 v.origin,
-                "`environment` needs an equirectangular `image` or a `cube` of six faces",
-                Some("add image = \"sky.hdr\""),
+                "`environment` needs an equirectangular `image`, a `cube` of six faces or a `gradient`",
+                Some("add image = \"sky.hdr\" or gradient = {}"),
                 &[],
             ))
         }
     };
     let rotation = r.num_in("rotation", 0.0, f64::is_finite, "an angle in degrees")?;
     let intensity = r.non_negative("intensity", 1.0)?;
-    r.finish(&["image", "cube", "rotation", "intensity"])?;
+    r.finish(&["image", "cube", "gradient", "rotation", "intensity"])?;
     Ok(Environment {
         map,
         rotation,
