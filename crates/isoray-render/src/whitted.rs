@@ -153,6 +153,7 @@ impl Worker<'_> {
                 }
                 // The Fresnel split at each hit, and the rays it spawns.
                 let m = hs.idx.len();
+                let touching = self.touching(ctx, &hs, &objects, &mut evals);
                 let mut local = vec![Vec3::ONE; m];
                 for k in 0..m {
                     let i = hs.idx[k];
@@ -164,16 +165,18 @@ impl Worker<'_> {
                     let nrm = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]);
                     let p = Vec3::new(hs.px[k], hs.py[k], hs.pz[k]);
                     let media = packet.media[i];
-                    let o = objects[k];
                     let n1 = media.top().map_or(1.0, |t| ctx.surfaces[t].ior);
+                    // Every object whose surface is here (touching objects
+                    // share it): leave those the ray is in, enter the others.
                     let mut after = media;
-                    let n2 = if media.contains(o) {
-                        after.remove(o);
-                        after.top().map_or(1.0, |t| ctx.surfaces[t].ior)
-                    } else {
-                        after.push(o);
-                        surf.ior
-                    };
+                    for &o in touching[k].iter() {
+                        if after.contains(o) {
+                            after.remove(o);
+                        } else {
+                            after.push(o);
+                        }
+                    }
+                    let n2 = after.top().map_or(1.0, |t| ctx.surfaces[t].ior);
                     let cos1 = -nrm.dot(d);
                     let transmitted = if surf.transparency > 0.0 {
                         refract(d, nrm, n1 / n2)
@@ -339,5 +342,31 @@ impl Worker<'_> {
             }
         }
         best.into_iter().map(|b| b.1).collect()
+    }
+
+    /// For each hit, the objects whose surface passes within a few hit
+    /// epsilons of it (the nearest always included): touching objects share
+    /// an interface, which a ray crosses out of one and into the other at once.
+    fn touching(&mut self, ctx: &Ctx, hs: &HitSet, nearest: &[usize], evals: &mut u64) -> Vec<Vec<usize>> {
+        let m = hs.idx.len();
+        let mut out: Vec<Vec<usize>> = nearest.iter().map(|&o| vec![o]).collect();
+        if self.object_evals.len() < 2 || m == 0 {
+            return out;
+        }
+        let near = 4.0 * OFFSET * ctx.scene.render.hit_epsilon as f32;
+        let mut d = vec![0.0f32; m];
+        for (j, ev) in self.object_evals.iter_mut().enumerate() {
+            if ctx.surfaces[j].transparency <= 0.0 {
+                continue; // only transparent objects are entered
+            }
+            ev.eval(&hs.px, &hs.py, &hs.pz, &mut d);
+            *evals += m as u64;
+            for q in 0..m {
+                if d[q].abs() < near && !out[q].contains(&j) {
+                    out[q].push(j);
+                }
+            }
+        }
+        out
     }
 }

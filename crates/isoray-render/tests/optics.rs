@@ -628,3 +628,34 @@ shape = "torus(p - vec3(1.2, 0.4, 0.0), 0.7, 0.3)"
     }
     assert!(far <= da.len() / 50, "{far} of {} depths differ", da.len());
 }
+
+#[test]
+fn touching_glass_blocks_act_as_one() {
+    // Two glass blocks of the same index sharing a face bend light exactly as
+    // one block of their union: the ray leaves one and enters the other at once.
+    let base = NESTED.replace(
+        "[[object]]\nmaterial = \"block\"\nshape = \"box(p, vec3(1.2, 1.0, 1.0))\"\n",
+        "",
+    );
+    let one = format!("{base}[[object]]\nmaterial = \"block\"\nshape = \"box(p, vec3(1.2, 1.0, 1.0))\"\n");
+    let two = format!(
+        "{base}[[object]]\nmaterial = \"block\"\nshape = \"box(p - vec3(0.0, 0.0, 0.5), vec3(1.2, 1.0, 0.5))\"\n\
+         [[object]]\nmaterial = \"inner\"\nshape = \"box(p + vec3(0.0, 0.0, 0.5), vec3(1.2, 1.0, 0.5))\"\n"
+    );
+    let img = |t: &str| {
+        render(&load_str(t, "t.toml", &[]).unwrap(), &RenderOptions::default())
+            .0
+            .color
+    };
+    let (a, b) = (img(&one), img(&two));
+    let differing = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| (x[0] - y[0]).abs() + (x[1] - y[1]).abs() + (x[2] - y[2]).abs() > 0.05)
+        .count();
+    assert!(differing <= a.len() / 50, "{differing} of {} pixels differ", a.len());
+    assert!(
+        a.iter().any(|c| c[1] > 0.9 && c[0] < 0.1),
+        "the stripe is seen through the glass"
+    );
+}
