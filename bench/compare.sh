@@ -15,30 +15,12 @@
 # no display, no anti-aliasing; isoray uses its default thread count.
 set -euo pipefail
 
-REPS=${REPS:-3}
-W=1280
-H=720
-
-ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-cd "$ROOT"
-
-bench/install-peers.sh
-cargo build --release -p isoray
-
-ISORAY=target/release/isoray
-[ -x "$ISORAY" ] || { echo "compare: $ISORAY not found after build" >&2; exit 1; }
-
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/isoray-bench.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
-trap 'exit 130' INT TERM          # so that the EXIT trap also cleans up on ^C / kill
-mkdir -p bench/out
+NAME=compare
+# shellcheck source=bench/common.sh
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 # Names, settings and command lines, in table order.  {OUT} is replaced by a
 # per-case PNG path in $TMP.
-NAMES=()
-SETTINGS=()
-CMDS=()
-add_case() { NAMES+=("$1"); SETTINGS+=("$2"); CMDS+=("$3"); }
 
 ISO_BASE="$ISORAY render examples/showcase.toml -o {OUT} --width $W --height $H --quiet"
 add_case "POV-Ray 3.7" "isosurface, 1 parallel light, hard shadows, no AA, 2 threads" \
@@ -52,14 +34,6 @@ add_case "isoray" "soft shadows + AO, aa 1" \
 add_case "isoray" "soft shadows + AO, aa 2 (showcase settings)" \
   "$ISO_BASE --aa 2 --set render.shadows=soft --set render.ao=true"
 
-now() { date +%s.%N; }
-
-# median of the arguments (numbers)
-median() {
-  printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 }
-    END { if (NR % 2) printf "%.3f", v[(NR + 1) / 2];
-          else printf "%.3f", (v[NR / 2] + v[NR / 2 + 1]) / 2 }'
-}
 
 LOAD_BEFORE=$(cut -d' ' -f1-3 /proc/loadavg)
 MEDIANS=()

@@ -25,31 +25,13 @@
 # the PNG write.
 set -euo pipefail
 
-REPS=${REPS:-3}
-W=1280
-H=720
-
-ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-cd "$ROOT"
-
-bench/install-peers.sh
-cargo build --release -p isoray
-
-ISORAY=target/release/isoray
-[ -x "$ISORAY" ] || { echo "optics: $ISORAY not found after build" >&2; exit 1; }
-
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/isoray-optics.XXXXXX")
-trap 'rm -rf "$TMP"' EXIT
-trap 'exit 130' INT TERM          # so that the EXIT trap also cleans up on ^C / kill
-mkdir -p bench/out
+NAME=optics
+# shellcheck source=bench/common.sh
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 # Names, settings and command lines, in table order.  {OUT} is replaced by a
 # per-case PNG path in $TMP.  Case 0 is POV-Ray, case 1 the like-for-like
 # isoray run (the floor a plane with a checker material, as POV's checker).
-NAMES=()
-SETTINGS=()
-CMDS=()
-add_case() { NAMES+=("$1"); SETTINGS+=("$2"); CMDS+=("$3"); }
 
 ISO_BASE="$ISORAY render bench/optics.toml -o {OUT} --width $W --height $H"
 add_case "POV-Ray 3.7" "native spheres + plane, isosurface torus, depth 5, hard shadows, no AA, 2 threads" \
@@ -57,14 +39,6 @@ add_case "POV-Ray 3.7" "native spheres + plane, isosurface torus, depth 5, hard 
 add_case "isoray" "SDF scene (plane and spheres recognised and intersected in closed form, torus sphere-traced), checker material, depth 5, hard shadows, no AO, aa 1 (same work as POV)" \
   "$ISO_BASE"
 
-now() { date +%s.%N; }
-
-# median of the arguments (numbers)
-median() {
-  printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 }
-    END { if (NR % 2) printf "%.3f", v[(NR + 1) / 2];
-          else printf "%.3f", (v[NR / 2] + v[NR / 2 + 1]) / 2 }'
-}
 
 # isoray: "rays: N primary (..), N reflected (..), N refracted (..), N shadow (..)"
 # -> "primary reflected refracted shadow" counts; render seconds from the summary.
