@@ -350,7 +350,9 @@ impl Worker<'_> {
     fn touching(&mut self, ctx: &Ctx, hs: &HitSet, nearest: &[usize], evals: &mut u64) -> Vec<Vec<usize>> {
         let m = hs.idx.len();
         let mut out: Vec<Vec<usize>> = nearest.iter().map(|&o| vec![o]).collect();
-        if self.object_evals.len() < 2 || m == 0 {
+        // Only transparent objects can share an interface a ray crosses.
+        let clear = ctx.surfaces.iter().filter(|s| s.transparency > 0.0).count();
+        if clear < 2 || m == 0 {
             return out;
         }
         let near = 4.0 * OFFSET * ctx.scene.render.hit_epsilon as f32;
