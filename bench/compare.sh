@@ -65,11 +65,7 @@ cp "$TMP/case0.png" bench/out/pov.png
 cp "$TMP/case1.png" bench/out/isoray.png
 
 POV_MED=${MEDIANS[0]}
-CPU=$(lscpu | awk -F: '/^Model name/ { sub(/^[ \t]+/, "", $2); print $2; exit }')
-POV_VER=$(povray --version 2>&1 | grep -m1 -o 'POV-Ray [0-9][^ ]*' || echo "POV-Ray ?")
-ISO_VER=$("$ISORAY" --version 2>/dev/null | head -n1 || true)
-REV=$(git rev-parse --short HEAD 2>/dev/null || echo "no commit")
-DIRTY=$(git status --porcelain 2>/dev/null | grep -q . && echo ", uncommitted changes" || true)
+machine_facts
 
 {
   echo "## isoray vs POV-Ray: examples/showcase.toml at ${W}x${H}"

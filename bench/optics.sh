@@ -114,11 +114,7 @@ ISO_MED=${MEDIANS[1]}
 ISO_RENDER_MED=$(median "${ISO_RENDER[@]}")
 POV_TRACE_MED=$(median "${POV_TRACE[@]}")
 
-CPU=$(lscpu | awk -F: '/^Model name/ { sub(/^[ \t]+/, "", $2); print $2; exit }')
-POV_VER=$(povray --version 2>&1 | grep -m1 -o 'POV-Ray [0-9][^ ]*' || echo "POV-Ray ?")
-ISO_VER=$("$ISORAY" --version 2>/dev/null | head -n1 || true)
-REV=$(git rev-parse --short HEAD 2>/dev/null || echo "no commit")
-DIRTY=$(git status --porcelain 2>/dev/null | grep -q . && echo ", uncommitted changes" || true)
+machine_facts
 
 {
   echo "## isoray vs POV-Ray: recursive ray tracing, bench/optics.toml at ${W}x${H}"
