@@ -1,0 +1,1 @@
+//! Mesh files: binary STL, OBJ, PLY and glTF binary (work in progress).

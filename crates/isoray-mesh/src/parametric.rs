@@ -1,0 +1,1 @@
+//! Tessellation of parametric surfaces over their (s, t) domain (work in progress).
