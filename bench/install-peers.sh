@@ -1,13 +1,19 @@
 #!/usr/bin/env bash
-# Install the benchmark peers with apt:
-#   - POV-Ray 3.7 (Debian package `povray`), for the renderer benchmark;
-#   - Singular (Debian package `singular`), for bench/singular/ (algebra
-#     reference data and timings).
+# Install the benchmark peers:
+#   - with apt: POV-Ray 3.7 (Debian package `povray`), for the renderer
+#     benchmark; Singular (Debian package `singular`), for bench/singular/
+#     (algebra reference data and timings); GNU time (Debian package `time`),
+#     for the peak memory in bench/mesh.sh;
+#   - with pip: fogleman's sdf as packaged on PyPI (`sdflab`, pinned; it pulls
+#     in numpy and scikit-image), for bench/mesh.sh.
+# (fidget, the other mesh peer, is a crates.io dependency of
+# bench/mesh/fidget-harness, which bench/mesh.sh builds with cargo.)
 # Idempotent: does nothing when it is already installed.
-# Needs root (or sudo) on Debian/Ubuntu.
+# Needs root (or sudo) on Debian/Ubuntu for the apt part.
 set -euo pipefail
 
-PKGS=(povray singular)
+PKGS=(povray singular time)
+SDFLAB_VERSION=0.2.0.1
 
 missing=()
 for p in "${PKGS[@]}"; do
@@ -18,18 +24,28 @@ done
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-peers: already installed: ${PKGS[*]}"
-  exit 0
+else
+  SUDO=()
+  if [ "$(id -u)" -ne 0 ]; then
+    SUDO=(sudo)
+  fi
+
+  echo "install-peers: installing: ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  "${SUDO[@]}" apt-get update
+  "${SUDO[@]}" apt-get install -y "${missing[@]}"
+
+  povray --version 2>&1 | grep -m1 'POV-Ray' || true
+  Singular --version 2>&1 | grep -m1 'Singular' || true
 fi
 
-SUDO=()
-if [ "$(id -u)" -ne 0 ]; then
-  SUDO=(sudo)
+have=$(python3 -c 'import importlib.metadata as m; print(m.version("sdflab"))' 2>/dev/null || true)
+if [ "$have" = "$SDFLAB_VERSION" ]; then
+  echo "install-peers: already installed: sdflab $SDFLAB_VERSION"
+else
+  echo "install-peers: installing: sdflab==$SDFLAB_VERSION (pip)"
+  # A Debian system Python refuses plain `pip install` (PEP 668); say we mean it.
+  python3 -m pip install --quiet "sdflab==$SDFLAB_VERSION" ||
+    python3 -m pip install --quiet --break-system-packages "sdflab==$SDFLAB_VERSION"
+  python3 -c 'import sdf, importlib.metadata as m; print("sdflab", m.version("sdflab"))'
 fi
-
-echo "install-peers: installing: ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-"${SUDO[@]}" apt-get update
-"${SUDO[@]}" apt-get install -y "${missing[@]}"
-
-povray --version 2>&1 | grep -m1 'POV-Ray' || true
-Singular --version 2>&1 | grep -m1 'Singular' || true

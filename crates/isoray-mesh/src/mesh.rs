@@ -111,7 +111,13 @@ impl Mesh {
         // Centre the sum on the bounds' middle to keep the terms small.
         let o = self
             .bounds()
-            .map(|b| [0.5 * (b[0][0] + b[1][0]), 0.5 * (b[0][1] + b[1][1]), 0.5 * (b[0][2] + b[1][2])])
+            .map(|b| {
+                [
+                    0.5 * (b[0][0] + b[1][0]),
+                    0.5 * (b[0][1] + b[1][1]),
+                    0.5 * (b[0][2] + b[1][2]),
+                ]
+            })
             .unwrap_or([0.0; 3]);
         (0..self.triangles.len())
             .map(|i| {
@@ -271,7 +277,11 @@ pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 /// a × b.
 pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 /// |a|.
@@ -289,8 +299,18 @@ mod tests {
             .map(|i| [(i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32])
             .collect();
         // Faces as quads (counter-clockwise from outside).
-        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-        let triangles = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
         Mesh {
             positions,
             triangles,

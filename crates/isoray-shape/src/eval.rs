@@ -27,30 +27,38 @@ pub trait Num: Copy {
 }
 
 impl Num for f64 {
+    #[inline(always)]
     fn from_f64(v: f64) -> Self {
         v
     }
+    #[inline(always)]
     fn value(self) -> f64 {
         self
     }
+    #[inline(always)]
     fn unary(op: UnOp, a: Self) -> Self {
         apply_unary(op, a)
     }
+    #[inline(always)]
     fn binary(op: BinOp, a: Self, b: Self) -> Self {
         apply_binary(op, a, b)
     }
 }
 
 impl Num for f32 {
+    #[inline(always)]
     fn from_f64(v: f64) -> Self {
         v as f32
     }
+    #[inline(always)]
     fn value(self) -> f64 {
         self as f64
     }
+    #[inline(always)]
     fn unary(op: UnOp, a: Self) -> Self {
         apply_unary(op, a)
     }
+    #[inline(always)]
     fn binary(op: BinOp, a: Self, b: Self) -> Self {
         apply_binary(op, a, b)
     }

@@ -237,6 +237,84 @@ impl Library {
         Ok(out)
     }
 
+    /// The coordinate functions of the parametric surface `name` as three
+    /// evaluation tapes, with its parameter domain, for tessellation.
+    ///
+    /// Each tape reads s from X and t from Y (Z is unused); see
+    /// [`ParametricCoords`](crate::surface::ParametricCoords). `params` are
+    /// the surface's parameter values in declaration order: `None` uses the
+    /// defaults, and a shorter list takes the defaults for the parameters it
+    /// leaves out. Unknown names, surfaces that are not parametric, too many
+    /// parameters or parameters of the wrong type are errors; the diagnostic
+    /// then has no text position (source 0 and an empty span) unless it comes
+    /// from a coordinate's text.
+    pub fn parametric_coords(
+        &self,
+        name: &str,
+        params: Option<&[Value]>,
+    ) -> Result<crate::surface::ParametricCoords, Diagnostic> {
+        let Some(s) = self.surfaces.get(name) else {
+            let mut d = Diagnostic::new(0, Span::default(), format!("unknown surface `{name}`"))
+                .with_label("no surface of that name in the library");
+            if let Some(n) = suggest(name, self.order.iter().map(String::as_str)) {
+                d = d.with_note(format!("did you mean `{n}`?"));
+            }
+            return Err(d);
+        };
+        let Some(def) = s.parametric.as_ref().filter(|_| s.mode == SurfaceMode::Parametric) else {
+            let mode = match s.mode {
+                SurfaceMode::Sdf => "a signed distance",
+                SurfaceMode::Implicit => "an implicit surface",
+                SurfaceMode::Parametric => "parametric without coordinates",
+            };
+            return Err(Diagnostic::new(
+                0,
+                Span::default(),
+                format!("surface `{name}` is not parametric, it is {mode}"),
+            )
+            .with_label("only parametric surfaces can be tessellated over (s, t)"));
+        };
+        let given = params.unwrap_or(&[]);
+        if given.len() > s.params.len() {
+            return Err(Diagnostic::new(
+                0,
+                Span::default(),
+                format!(
+                    "surface `{name}` takes {} parameter(s), found {}",
+                    s.params.len(),
+                    given.len()
+                ),
+            )
+            .with_label("too many parameters"));
+        }
+        let mut values = Vec::with_capacity(s.params.len());
+        for (i, (pname, default)) in s.params.iter().enumerate() {
+            match given.get(i) {
+                Some(v) if v.ty() != default.ty() => {
+                    return Err(Diagnostic::new(
+                        0,
+                        Span::default(),
+                        format!(
+                            "parameter `{pname}` of surface `{name}` is a `{}`, found `{}`",
+                            default.ty(),
+                            v.ty()
+                        ),
+                    )
+                    .with_label(format!("expected {}", default.ty())));
+                }
+                Some(v) => values.push(*v),
+                None => values.push(*default),
+            }
+        }
+        let mut b = Builder::new();
+        let nodes = self.lower_coords(&mut b, s, &values)?;
+        Ok(crate::surface::ParametricCoords {
+            name: name.to_string(),
+            coords: nodes.map(|n| b.tape(n)),
+            domain: def.domain,
+        })
+    }
+
     /// A user primitive by name.
     pub fn surface(&self, name: &str) -> Option<&Surface> {
         self.surfaces.get(name)

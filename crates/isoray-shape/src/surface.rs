@@ -19,7 +19,7 @@ use num_traits::One;
 
 use crate::algebraic::{dense_terms, eval_with_scale, squarefree_part, taylor_size, xyz_ring};
 use crate::diag::{Diagnostic, SourceId};
-use crate::ir::{Builder, Node};
+use crate::ir::{Builder, Node, Tape};
 use crate::lipschitz::Field;
 use crate::lower::{Library, Surface, SurfaceMode};
 use crate::syntax::Program;
@@ -684,6 +684,57 @@ pub fn describe(name: &str, s: &Surface, a: &Analysis) -> String {
     out
 }
 
+/// The coordinate functions of a parametric surface compiled for
+/// evaluation, as returned by [`Library::parametric_coords`]: what the mesh
+/// pipeline tessellates.
+///
+/// Each tape computes one coordinate with s read from the X input and t from
+/// the Y input; the Z input is unused. Evaluating them with a
+/// [`PointEvaluator`](crate::PointEvaluator) over [`Dual`](crate::Dual)
+/// numbers, seeding s with the derivative `[1, 0, 0]` and t with
+/// `[0, 1, 0]`, gives ∂/∂s and ∂/∂t exactly.
+#[derive(Debug, Clone)]
+pub struct ParametricCoords {
+    /// The surface's name.
+    pub name: String,
+    /// x(s, t), y(s, t), z(s, t).
+    pub coords: [Tape; 3],
+    /// The parameter domain: [s_min, s_max], [t_min, t_max].
+    pub domain: [[f64; 2]; 2],
+}
+
+impl ParametricCoords {
+    /// The point (x, y, z) at (s, t) (allocates evaluators: for a few points only).
+    pub fn point(&self, s: f64, t: f64) -> [f64; 3] {
+        self.coords
+            .each_ref()
+            .map(|tape| crate::PointEvaluator::<f64>::new(tape).eval(s, t, 0.0))
+    }
+
+    /// The point at (s, t) and its exact partial derivatives ∂/∂s and ∂/∂t
+    /// (by dual numbers; allocates evaluators: for a few points only).
+    pub fn point_and_derivatives(&self, s: f64, t: f64) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let (mut p, mut ds, mut dt) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+        for (k, tape) in self.coords.iter().enumerate() {
+            let v = crate::PointEvaluator::<crate::Dual>::new(tape).eval(
+                crate::Dual {
+                    v: s,
+                    d: [1.0, 0.0, 0.0],
+                },
+                crate::Dual {
+                    v: t,
+                    d: [0.0, 1.0, 0.0],
+                },
+                crate::Dual { v: 0.0, d: [0.0; 3] },
+            );
+            p[k] = v.v;
+            ds[k] = v.d[0];
+            dt[k] = v.d[1];
+        }
+        (p, ds, dt)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -715,5 +766,55 @@ mod tests {
             assert!(BoundMethod::parse(n).is_some());
         }
         assert_eq!(BoundMethod::parse("exact"), None);
+    }
+
+    #[test]
+    fn parametric_coords_evaluate_a_sphere_with_exact_derivatives() {
+        let mut lib = Library::new();
+        lib.add_parametric_surface(
+            "ball",
+            vec![("r".to_string(), Value::Float(2.0))],
+            [
+                ("r * cos(t) * cos(s)", 0),
+                ("r * cos(t) * sin(s)", 1),
+                ("r * sin(t)", 2),
+            ],
+            [[0.0, 2.0 * std::f64::consts::PI], [-1.5, 1.5]],
+            SurfaceOptions::default(),
+        )
+        .unwrap();
+        let c = lib.parametric_coords("ball", None).unwrap();
+        assert_eq!(c.name, "ball");
+        assert_eq!(c.domain, [[0.0, 2.0 * std::f64::consts::PI], [-1.5, 1.5]]);
+        let (s, t) = (0.7, 0.3);
+        let (p, ds, dt) = c.point_and_derivatives(s, t);
+        let want = [2.0 * t.cos() * s.cos(), 2.0 * t.cos() * s.sin(), 2.0 * t.sin()];
+        let want_ds = [-2.0 * t.cos() * s.sin(), 2.0 * t.cos() * s.cos(), 0.0];
+        let want_dt = [-2.0 * t.sin() * s.cos(), -2.0 * t.sin() * s.sin(), 2.0 * t.cos()];
+        for k in 0..3 {
+            assert!((p[k] - want[k]).abs() < 1e-14);
+            assert!((ds[k] - want_ds[k]).abs() < 1e-14);
+            assert!((dt[k] - want_dt[k]).abs() < 1e-14);
+        }
+        assert_eq!(c.point(s, t), p);
+        // Explicit parameters replace the defaults.
+        let c3 = lib.parametric_coords("ball", Some(&[Value::Float(3.0)])).unwrap();
+        assert!((c3.point(s, t)[2] - 3.0 * t.sin()).abs() < 1e-14);
+
+        // Errors: unknown names, non-parametric surfaces, bad parameters.
+        let e = lib.parametric_coords("bal", None).unwrap_err();
+        assert!(e.message.contains("unknown surface `bal`"), "{e:?}");
+        assert!(e.notes.iter().any(|n| n.contains("`ball`")), "{e:?}");
+        lib.add_surface("blob", vec![], "length(p) - 1.0", 3).unwrap();
+        let e = lib.parametric_coords("blob", None).unwrap_err();
+        assert!(e.message.contains("not parametric"), "{e:?}");
+        let e = lib
+            .parametric_coords("ball", Some(&[Value::Float(1.0), Value::Float(2.0)]))
+            .unwrap_err();
+        assert!(e.message.contains("takes 1 parameter"), "{e:?}");
+        let e = lib
+            .parametric_coords("ball", Some(&[Value::Vec2([1.0, 2.0])]))
+            .unwrap_err();
+        assert!(e.message.contains("parameter `r`"), "{e:?}");
     }
 }

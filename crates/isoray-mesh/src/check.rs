@@ -1,0 +1,172 @@
+//! Self-intersection detection: pairs of triangles that cross each other.
+//!
+//! Triangles are binned on a uniform grid by their bounding boxes; each pair
+//! that shares a bin is tested exactly once. Pairs with no common vertex
+//! intersect when an edge of one passes through the other; pairs that share
+//! one vertex intersect when the edge opposite the shared vertex of one
+//! passes through the other (a fold). Pairs that share an edge are
+//! neighbours and are not tested.
+
+use crate::mesh::{cross, dot, sub, Mesh};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// The pairs of triangles (by index, smaller first) that intersect, sorted.
+pub fn self_intersections(mesh: &Mesh) -> Vec<(u32, u32)> {
+    let n = mesh.triangles.len();
+    if n < 2 {
+        return Vec::new();
+    }
+    let tris: Vec<[[f64; 3]; 3]> = (0..n).map(|i| mesh.corners(i)).collect();
+    let boxes: Vec<[[f64; 3]; 2]> = tris
+        .iter()
+        .map(|t| {
+            let mut b = [t[0], t[0]];
+            for p in &t[1..] {
+                for k in 0..3 {
+                    b[0][k] = b[0][k].min(p[k]);
+                    b[1][k] = b[1][k].max(p[k]);
+                }
+            }
+            b
+        })
+        .collect();
+    // Bin size: twice the mean box extent.
+    let mean: f64 = boxes
+        .iter()
+        .map(|b| (0..3).map(|k| b[1][k] - b[0][k]).fold(0.0, f64::max))
+        .sum::<f64>()
+        / n as f64;
+    let size = (2.0 * mean).max(1e-12);
+    let bin = |p: [f64; 3]| p.map(|v| (v / size).floor() as i64);
+    let mut bins: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+    for (i, b) in boxes.iter().enumerate() {
+        let (lo, hi) = (bin(b[0]), bin(b[1]));
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    bins.entry([x, y, z]).or_default().push(i as u32);
+                }
+            }
+        }
+    }
+    let lists: Vec<(&[i64; 3], &Vec<u32>)> = bins.iter().collect();
+    let mut pairs: Vec<(u32, u32)> = lists
+        .par_iter()
+        .flat_map_iter(|(cell, list)| {
+            let mut found = Vec::new();
+            for (ai, &a) in list.iter().enumerate() {
+                for &b in &list[ai + 1..] {
+                    let (a, b) = (a.min(b), a.max(b));
+                    let (ba, bb) = (&boxes[a as usize], &boxes[b as usize]);
+                    if (0..3).any(|k| ba[1][k] < bb[0][k] || bb[1][k] < ba[0][k]) {
+                        continue;
+                    }
+                    // Test the pair only in the bin holding the overlap's low corner.
+                    let low = [0, 1, 2].map(|k| ba[0][k].max(bb[0][k]));
+                    if bin(low) != **cell {
+                        continue;
+                    }
+                    if triangles_intersect(mesh, &tris, a as usize, b as usize) {
+                        found.push((a, b));
+                    }
+                }
+            }
+            found.into_iter()
+        })
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    pairs
+}
+
+fn triangles_intersect(mesh: &Mesh, tris: &[[[f64; 3]; 3]], a: usize, b: usize) -> bool {
+    let (ta, tb) = (mesh.triangles[a], mesh.triangles[b]);
+    let shared: Vec<(usize, usize)> = (0..3)
+        .flat_map(|i| (0..3).map(move |j| (i, j)))
+        .filter(|&(i, j)| ta[i] == tb[j])
+        .collect();
+    let (pa, pb) = (&tris[a], &tris[b]);
+    match shared.len() {
+        0 => {
+            (0..3).any(|i| segment_hits(pa[i], pa[(i + 1) % 3], pb))
+                || (0..3).any(|i| segment_hits(pb[i], pb[(i + 1) % 3], pa))
+        }
+        1 => {
+            let (i, j) = shared[0];
+            segment_hits(pa[(i + 1) % 3], pa[(i + 2) % 3], pb) || segment_hits(pb[(j + 1) % 3], pb[(j + 2) % 3], pa)
+        }
+        _ => false,
+    }
+}
+
+/// True when the segment p–q passes through the interior of triangle t
+/// (touching at the segment's ends or the triangle's border does not count).
+fn segment_hits(p: [f64; 3], q: [f64; 3], t: &[[f64; 3]; 3]) -> bool {
+    const EPS: f64 = 1e-9;
+    let d = sub(q, p);
+    let (e1, e2) = (sub(t[1], t[0]), sub(t[2], t[0]));
+    let h = cross(d, e2);
+    let det = dot(e1, h);
+    let scale = dot(e1, e1).max(dot(e2, e2)) * dot(d, d).sqrt();
+    if det.abs() <= 1e-12 * scale {
+        return false; // parallel (coplanar overlaps are not reported)
+    }
+    let inv = 1.0 / det;
+    let s = sub(p, t[0]);
+    let u = dot(s, h) * inv;
+    if u <= EPS || u >= 1.0 - EPS {
+        return false;
+    }
+    let qv = cross(s, e1);
+    let v = dot(d, qv) * inv;
+    if v <= EPS || u + v >= 1.0 - EPS {
+        return false;
+    }
+    let tt = dot(e2, qv) * inv;
+    tt > EPS && tt < 1.0 - EPS
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mesh(tris: &[[[f32; 3]; 3]]) -> Mesh {
+        let mut m = Mesh::default();
+        for t in tris {
+            let base = m.positions.len() as u32;
+            m.positions.extend_from_slice(t);
+            m.triangles.push([base, base + 1, base + 2]);
+        }
+        m
+    }
+
+    #[test]
+    fn crossing_triangles_are_found_and_separate_ones_are_not() {
+        let a = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let crossing = [[0.2, 0.2, -0.5], [0.3, 0.2, 0.5], [0.2, 0.3, 0.5]];
+        let apart = [[0.2, 0.2, 0.1], [0.3, 0.2, 0.5], [0.2, 0.3, 0.5]];
+        assert_eq!(self_intersections(&mesh(&[a, crossing])), vec![(0, 1)]);
+        assert!(self_intersections(&mesh(&[a, apart])).is_empty());
+    }
+
+    #[test]
+    fn a_fold_through_a_shared_vertex_is_found() {
+        // Two triangles sharing vertex 0; the second folds through the first.
+        let mut m = Mesh {
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [2.0, 0.0, 0.0],
+                [0.0, 2.0, 0.0],
+                [1.0, 1.0, -0.5],
+                [0.5, 0.1, 0.5],
+            ],
+            ..Default::default()
+        };
+        m.triangles = vec![[0, 1, 2], [0, 3, 4]];
+        assert_eq!(self_intersections(&m), vec![(0, 1)]);
+        // Lifted clear of the first triangle: no intersection.
+        m.positions[3] = [1.0, 1.0, 0.2];
+        assert!(self_intersections(&m).is_empty());
+    }
+}

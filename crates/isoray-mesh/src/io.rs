@@ -1,1 +1,0 @@
-//! Mesh files: binary STL, OBJ, PLY and glTF binary (work in progress).
