@@ -1,6 +1,7 @@
 //! The `isoray` command line.
 
 mod algebra_cmd;
+mod mesh_cmd;
 
 use std::io::{BufRead, BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -124,6 +125,57 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
+    /// Mesh a scene's objects, one object, or one surface into a triangle mesh
+    /// file (.stl, .obj, .ply or .glb by the output's extension). Shapes are
+    /// meshed by sparse-octree dual contouring (closed, manifold, sharp
+    /// edges kept); a parametric surface is tessellated over its (s, t) domain.
+    Mesh {
+        /// The scene file.
+        scene: PathBuf,
+        /// An object's name (`[[object]] name`) or a surface's (`[surface.NAME]`);
+        /// leave out to mesh every object (unbounded ones, such as planes, are skipped).
+        name: Option<String>,
+        /// Output mesh: .stl (binary), .obj, .ply (binary) or .glb.
+        #[arg(short, long, value_name = "OUT")]
+        output: PathBuf,
+        /// Cells along the longest side of the bounds (default 128); for a
+        /// parametric surface, the base grid's cells along s and t (default 16).
+        #[arg(long, value_name = "N")]
+        resolution: Option<u32>,
+        /// The box to mesh: xmin,ymin,zmin,xmax,ymax,zmax (default: found from
+        /// the distance bound). Where it cuts a shape, the mesh is closed by its faces.
+        #[arg(
+            long,
+            value_delimiter = ',',
+            allow_hyphen_values = true,
+            value_name = "X0,Y0,Z0,X1,Y1,Z1"
+        )]
+        bounds: Option<Vec<f64>>,
+        /// Normals that differ by more than this many degrees within a cell
+        /// make a sharp feature (edge or corner) that is kept sharp.
+        #[arg(long, default_value_t = 30.0, value_name = "DEGREES")]
+        feature_angle: f64,
+        /// How much the distance may overestimate (default 1 / render.step_scale):
+        /// empty space is skipped only beyond this factor.
+        #[arg(long, value_name = "L")]
+        lipschitz: Option<f64>,
+        /// Chord tolerance of a parametric tessellation, in world units
+        /// (default 1/1000 of the surface's size).
+        #[arg(long, value_name = "T")]
+        tolerance: Option<f64>,
+        /// Also look for self-intersecting triangles (slower).
+        #[arg(long)]
+        check_intersections: bool,
+        /// Override any scene key.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Worker threads (default: all cores).
+        #[arg(long, value_name = "N")]
+        threads: Option<usize>,
+        /// No progress bar.
+        #[arg(short, long)]
+        quiet: bool,
+    },
     /// Parse and type-check a scene; print `ok` or the errors. Objects that
     /// call implicit or parametric surfaces are also checked on sampled camera
     /// rays for distance estimates that overstep the surface.
@@ -137,7 +189,7 @@ enum Command {
 }
 
 /// A failure with its exit code: 1 for rendering/IO, 2 for bad input.
-struct Failure {
+pub(crate) struct Failure {
     code: u8,
     message: String,
 }
@@ -199,6 +251,33 @@ fn main() -> ExitCode {
             timeout,
         } => algebra_cmd::cmd_implicitize(&x, &y, z.as_deref(), params.as_deref(), &method, stats, timeout),
         Command::Check { scene, set } => cmd_check(&scene, &set),
+        Command::Mesh {
+            scene,
+            name,
+            output,
+            resolution,
+            bounds,
+            feature_angle,
+            lipschitz,
+            tolerance,
+            check_intersections,
+            set,
+            threads,
+            quiet,
+        } => mesh_cmd::cmd_mesh(&mesh_cmd::MeshArgs {
+            scene: &scene,
+            name: name.as_deref(),
+            output: &output,
+            resolution,
+            bounds: bounds.as_deref(),
+            feature_angle,
+            lipschitz,
+            tolerance,
+            overrides: &set,
+            threads,
+            check_intersections,
+            quiet,
+        }),
         Command::Surface { scene, name, set } => cmd_surface(&scene, &name, &set),
     };
     match result {
@@ -286,11 +365,11 @@ fn cmd_surface(scene_path: &Path, name: &str, overrides: &[String]) -> Result<()
     Ok(())
 }
 
-fn usage(message: String) -> Failure {
+pub(crate) fn usage(message: String) -> Failure {
     Failure { code: 2, message }
 }
 
-fn io_failure(message: String) -> Failure {
+pub(crate) fn io_failure(message: String) -> Failure {
     Failure { code: 1, message }
 }
 
