@@ -22,6 +22,10 @@ pub struct MeshSettings {
     /// Patches whose normals differ by more than this many degrees are
     /// sharp features, placed by the quadratic error fit (default 30).
     pub feature_angle_deg: f64,
+    /// The level meshed: the surface f = offset (default 0). A positive
+    /// offset grows a solid by that distance; around an unsigned field (a
+    /// sheet such as |f|) it gives a closed shell of thickness 2 × offset.
+    pub offset: f64,
     /// How much the field may overestimate the distance (≥ 1, default 1):
     /// empty space is skipped only where |f| > lipschitz × the cell's half-diagonal.
     pub lipschitz: f64,
@@ -33,6 +37,7 @@ impl Default for MeshSettings {
             resolution: 128,
             bounds: None,
             feature_angle_deg: 30.0,
+            offset: 0.0,
             lipschitz: 1.0,
         }
     }
@@ -63,6 +68,12 @@ pub struct MeshStats {
     pub timings: Vec<(Stage, f64)>,
     /// Total wall time in seconds.
     pub seconds: f64,
+}
+
+/// The box that [`mesh_shape`] finds for the surface f = `offset` of
+/// `tape` before padding it (see [`MeshSettings::lipschitz`]).
+pub fn shape_bounds(tape: &Tape, offset: f64, lipschitz: f64) -> Result<[[f64; 3]; 2], MeshError> {
+    find_bounds(tape, offset, lipschitz.max(1.0), &Control::none())
 }
 
 /// Meshes the surface of the shape `tape` (a signed distance, or a bound on
@@ -97,12 +108,18 @@ pub fn mesh_shape_with(tape: &Tape, settings: &MeshSettings, ctl: &Control) -> R
             settings.feature_angle_deg
         )));
     }
+    if !settings.offset.is_finite() {
+        return Err(MeshError::Settings(format!(
+            "the offset must be a finite number, found {}",
+            settings.offset
+        )));
+    }
     let resolution = settings.resolution;
     let bounds = match settings.bounds {
         Some(b) => b,
         None => {
             ctl.progress(Stage::Bounds, 0.0);
-            let b = find_bounds(tape, settings.lipschitz, ctl)?;
+            let b = find_bounds(tape, settings.offset, settings.lipschitz, ctl)?;
             mark(Stage::Bounds, &mut lap);
             // Pad by two cells of the final grid (after padding).
             let longest = (0..3).map(|k| b[1][k] - b[0][k]).fold(0.0, f64::max);
@@ -111,10 +128,13 @@ pub fn mesh_shape_with(tape: &Tape, settings: &MeshSettings, ctl: &Control) -> R
         }
     };
     let grid = Grid::new(bounds, resolution)?;
-    let field = Field::new(tape, grid.box_bounds());
+    let field = Field::new(tape, grid.box_bounds(), settings.offset);
     let cells = active_cells(&field, &grid, settings.lipschitz, ctl)?;
     mark(Stage::Octree, &mut lap);
     let c = contour(&field, &grid, cells, settings.feature_angle_deg, ctl)?;
+    if c.triangles.is_empty() && c.active_cells > 0 {
+        return Err(MeshError::NoSignChange);
+    }
     mark(Stage::Faces, &mut lap);
 
     // Normals from the gradient; the distance error at each vertex.

@@ -1,5 +1,5 @@
-//! The field the mesher samples: a shape's distance clipped to the meshing
-//! box, max(f, box), so that the mesh is closed even where the box cuts the
+//! The field the mesher samples: a shape's distance (less the level meshed)
+//! clipped to the meshing box, max(f − iso, box), so that the mesh is closed even where the box cuts the
 //! shape, evaluated in parallel batches.
 
 use isoray_shape::{BatchEvaluator, Tape};
@@ -13,14 +13,21 @@ pub(crate) struct Field<'t> {
     tape: &'t Tape,
     centre: [f64; 3],
     half: [f64; 3],
+    /// The level meshed: the surface f = iso.
+    iso: f64,
 }
 
 impl<'t> Field<'t> {
-    /// The field of `tape` inside `bounds` ([min, max]).
-    pub(crate) fn new(tape: &'t Tape, bounds: [[f64; 3]; 2]) -> Self {
+    /// The field f − iso of `tape` inside `bounds` ([min, max]).
+    pub(crate) fn new(tape: &'t Tape, bounds: [[f64; 3]; 2], iso: f64) -> Self {
         let centre = [0, 1, 2].map(|k| 0.5 * (bounds[0][k] + bounds[1][k]));
         let half = [0, 1, 2].map(|k| 0.5 * (bounds[1][k] - bounds[0][k]));
-        Field { tape, centre, half }
+        Field {
+            tape,
+            centre,
+            half,
+            iso,
+        }
     }
 
     /// The shape's tape.
@@ -77,7 +84,7 @@ impl<'t> Field<'t> {
         }
         ev.eval(&xyz[0], &xyz[1], &xyz[2], out);
         for (v, p) in out.iter_mut().zip(points) {
-            *v = v.max(self.box_distance(*p).0);
+            *v = (*v - self.iso).max(self.box_distance(*p).0);
         }
     }
 

@@ -30,7 +30,7 @@ pub mod parametric;
 mod qef;
 
 pub use check::self_intersections;
-pub use extract::{mesh_shape, mesh_shape_with, MeshSettings, MeshStats};
+pub use extract::{mesh_shape, mesh_shape_with, shape_bounds, MeshSettings, MeshStats};
 pub use mesh::{Mesh, MeshMaterial, Topology};
 pub use octree::SEARCH_RADIUS;
 
@@ -48,6 +48,10 @@ pub enum MeshError {
     /// The surface reaches the search cube: give bounds.
     #[error("the shape is unbounded (its surface reaches ±{SEARCH_RADIUS}): give bounds to mesh a part of it")]
     Unbounded,
+    /// The field comes near zero but never turns negative: an unsigned
+    /// field (a sheet such as |f|) encloses no solid.
+    #[error("the field comes close to zero but is never negative: an unsigned field (a sheet such as abs(f)) encloses no solid; mesh a thin shell around it with an offset")]
+    NoSignChange,
     /// Cancelled through [`Control`]'s flag.
     #[error("cancelled")]
     Cancelled,

@@ -157,7 +157,7 @@ pub const SEARCH_RADIUS: f64 = 1.0e4;
 /// repeated octree descents that shrink a search cube (±[`SEARCH_RADIUS`])
 /// onto the cells the surface may cross. Errors when there is no surface or
 /// it reaches the search cube's sides (an unbounded shape such as a plane).
-pub(crate) fn find_bounds(tape: &Tape, lipschitz: f64, ctl: &Control) -> Result<[[f64; 3]; 2], MeshError> {
+pub(crate) fn find_bounds(tape: &Tape, iso: f64, lipschitz: f64, ctl: &Control) -> Result<[[f64; 3]; 2], MeshError> {
     const DEPTH: u32 = 6;
     let mut cube = [[-SEARCH_RADIUS; 3], [SEARCH_RADIUS; 3]];
     let mut found: Option<[[f64; 3]; 2]> = None;
@@ -172,7 +172,7 @@ pub(crate) fn find_bounds(tape: &Tape, lipschitz: f64, ctl: &Control) -> Result<
         };
         // The search field is not clipped: a box far larger than the cube.
         let far = [[-1e300; 3], [1e300; 3]];
-        let field = Field::new(tape, far);
+        let field = Field::new(tape, far, iso);
         let cells = active_cells(&field, &grid, lipschitz, &Control::silent(ctl))?;
         if cells.is_empty() {
             return Err(MeshError::NoSurface);

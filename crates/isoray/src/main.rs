@@ -159,6 +159,11 @@ enum Command {
         /// empty space is skipped only beyond this factor.
         #[arg(long, value_name = "L")]
         lipschitz: Option<f64>,
+        /// Mesh the level f = D instead of f = 0: D > 0 grows solids by D, and
+        /// turns an unsigned field (a sheet such as abs(f)) into a closed
+        /// shell 2D thick.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_name = "D")]
+        offset: f64,
         /// Chord tolerance of a parametric tessellation, in world units
         /// (default 1/1000 of the surface's size).
         #[arg(long, value_name = "T")]
@@ -259,6 +264,7 @@ fn main() -> ExitCode {
             bounds,
             feature_angle,
             lipschitz,
+            offset,
             tolerance,
             check_intersections,
             set,
@@ -272,6 +278,7 @@ fn main() -> ExitCode {
             bounds: bounds.as_deref(),
             feature_angle,
             lipschitz,
+            offset,
             tolerance,
             overrides: &set,
             threads,

@@ -24,6 +24,7 @@ pub(crate) struct MeshArgs<'a> {
     pub bounds: Option<&'a [f64]>,
     pub feature_angle: f64,
     pub lipschitz: Option<f64>,
+    pub offset: f64,
     pub tolerance: Option<f64>,
     pub overrides: &'a [String],
     pub threads: Option<usize>,
@@ -61,6 +62,13 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
     if let Some(r) = a.resolution {
         if r < 2 {
             return Err(usage(format!("--resolution must be at least 2, found {r}")));
+        }
+    }
+    if let Some(l) = a.lipschitz {
+        if !(l.is_finite() && l >= 1.0) {
+            return Err(usage(format!(
+                "--lipschitz must be a number of at least 1 (how much the distance may overestimate), found {l}"
+            )));
         }
     }
     let scene = load(a.scene, a.overrides)?;
@@ -138,6 +146,7 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
         resolution: a.resolution.unwrap_or(MeshSettings::default().resolution),
         bounds,
         feature_angle_deg: a.feature_angle,
+        offset: a.offset,
         lipschitz,
     };
     let single = a.name.is_some();
@@ -163,6 +172,17 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
                     "warning: skipping {}: {e}\n  = help: give --bounds, or name the objects to mesh",
                     t.label
                 );
+                continue;
+            }
+            Err(e @ MeshError::NoSignChange) => {
+                let help = format!(
+                    "  = help: pass --offset {:.3} for a shell two cells thick",
+                    stats_hint(&settings, t.shape)
+                );
+                if single {
+                    return Err(usage(format!("{}: {e}\n{help}", t.label)));
+                }
+                eprintln!("warning: skipping {}: {e}\n{help}", t.label);
                 continue;
             }
             Err(e @ (MeshError::Unbounded | MeshError::NoSurface)) => {
@@ -283,6 +303,20 @@ fn mesh_parametric(a: &MeshArgs, scene: &Scene, name: &str, format: Format, star
     );
     println!("wrote {} ({})", a.output.display(), format);
     Ok(())
+}
+
+/// One cell of the resolution the shape would be meshed at (for advice).
+fn stats_hint(settings: &MeshSettings, shape: &Shape) -> f64 {
+    let bounds = settings
+        .bounds
+        .or_else(|| isoray_mesh::shape_bounds(shape.tape(), settings.offset, settings.lipschitz).ok());
+    match bounds {
+        Some(b) => {
+            let longest = (0..3).map(|k| b[1][k] - b[0][k]).fold(0.0, f64::max);
+            longest / settings.resolution.max(1) as f64
+        }
+        None => 0.01,
+    }
 }
 
 fn material(scene: &Scene, i: usize) -> MeshMaterial {
