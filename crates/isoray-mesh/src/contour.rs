@@ -512,7 +512,6 @@ fn crossings<'t>(
         fb: f64,
         side: i8,
         t: f64,
-        done: bool,
     }
     let mut br: Vec<Bracket> = ends
         .iter()
@@ -523,33 +522,35 @@ fn crossings<'t>(
             fb: f1,
             side: 0,
             t: 0.5,
-            done: false,
         })
         .collect();
     let at = |e: &([f64; 3], f64, [f64; 3], f64), t: f64| [0, 1, 2].map(|k| e.0[k] + t * (e.2[k] - e.0[k]));
     let mut pts = Vec::with_capacity(ends.len());
     let mut vals = Vec::new();
+    // Converged when |f| is this small (a ten-millionth of the edge for a
+    // distance field) or the bracket this narrow.
+    let tiny = ends.first().map_or(0.0, |e| {
+        let d = [0, 1, 2].map(|k| e.2[k] - e.0[k]);
+        1e-7 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+    });
+    let mut open: Vec<usize> = (0..br.len()).collect();
     for _ in 0..ROOT_ITERATIONS {
         pts.clear();
-        for (b, e) in br.iter_mut().zip(ends) {
-            if !b.done {
-                let t = if (b.fa - b.fb).abs() > 0.0 && b.fa.is_finite() && b.fb.is_finite() {
-                    (b.a * b.fb - b.b * b.fa) / (b.fb - b.fa)
-                } else {
-                    0.5 * (b.a + b.b)
-                };
-                b.t = if t > b.a && t < b.b { t } else { 0.5 * (b.a + b.b) };
-            }
-            pts.push(at(e, b.t));
+        for &i in &open {
+            let b = &mut br[i];
+            let t = if (b.fa - b.fb).abs() > 0.0 && b.fa.is_finite() && b.fb.is_finite() {
+                (b.a * b.fb - b.b * b.fa) / (b.fb - b.fa)
+            } else {
+                0.5 * (b.a + b.b)
+            };
+            b.t = if t > b.a && t < b.b { t } else { 0.5 * (b.a + b.b) };
+            pts.push(at(&ends[i], b.t));
         }
         field.values_with(ev, &pts, &mut vals);
-        let mut open = false;
-        for (b, &ft) in br.iter_mut().zip(&vals) {
-            if b.done {
-                continue;
-            }
-            if ft == 0.0 || !ft.is_finite() {
-                b.done = true;
+        let mut still = Vec::with_capacity(open.len());
+        for (&i, &ft) in open.iter().zip(&vals) {
+            let b = &mut br[i];
+            if ft.abs() <= tiny || !ft.is_finite() {
                 continue;
             }
             if (ft < 0.0) == (b.fa < 0.0) {
@@ -567,11 +568,12 @@ fn crossings<'t>(
                 }
                 b.side = 1;
             }
-            // Converged to well below f64 noise in a cell.
-            b.done = b.b - b.a < 1e-9 || ft.abs() < 1e-14;
-            open |= !b.done;
+            if b.b - b.a >= 1e-9 {
+                still.push(i);
+            }
         }
-        if !open {
+        open = still;
+        if open.is_empty() {
             break;
         }
     }

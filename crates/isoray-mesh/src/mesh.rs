@@ -2,7 +2,7 @@
 //! and the measurements made on it: topology (watertight, manifold,
 //! consistently wound), area and enclosed volume.
 
-use std::collections::HashMap;
+use rayon::prelude::*;
 
 /// A material carried by a mesh: what glTF and the raster pipeline need.
 #[derive(Debug, Clone, PartialEq)]
@@ -132,8 +132,6 @@ impl Mesh {
     /// A triangle counts as degenerate when two of its indices are equal or
     /// its area is below `1e-12` times the square of the bounds' diagonal.
     pub fn topology(&self) -> Topology {
-        // Directed edge uses per undirected edge.
-        let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(self.triangles.len() * 2);
         let diag2 = self
             .bounds()
             .map(|b| {
@@ -142,6 +140,9 @@ impl Mesh {
             })
             .unwrap_or(0.0);
         let mut topo = Topology::default();
+        // Undirected edges as (smaller << 32 | larger), with the direction
+        // in which each triangle runs along it; sorted, equal keys are one edge.
+        let mut edges: Vec<(u64, bool)> = Vec::with_capacity(self.triangles.len() * 3);
         for (i, t) in self.triangles.iter().enumerate() {
             if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
                 topo.degenerate_triangles += 1;
@@ -154,22 +155,26 @@ impl Mesh {
             }
             for k in 0..3 {
                 let (u, v) = (t[k], t[(k + 1) % 3]);
-                let e = edges.entry((u.min(v), u.max(v))).or_insert((0, 0));
-                if u < v {
-                    e.0 += 1;
-                } else {
-                    e.1 += 1;
-                }
+                edges.push(((u.min(v) as u64) << 32 | u.max(v) as u64, u < v));
             }
         }
-        topo.edges = edges.len();
-        for &(f, b) in edges.values() {
-            match f + b {
+        edges.par_sort_unstable();
+        let mut i = 0;
+        while i < edges.len() {
+            let mut j = i;
+            let mut forward = 0;
+            while j < edges.len() && edges[j].0 == edges[i].0 {
+                forward += edges[j].1 as usize;
+                j += 1;
+            }
+            topo.edges += 1;
+            match j - i {
                 1 => topo.boundary_edges += 1,
-                2 if f != 1 => topo.misoriented_edges += 1,
+                2 if forward != 1 => topo.misoriented_edges += 1,
                 2 => {}
                 _ => topo.nonmanifold_edges += 1,
             }
+            i = j;
         }
         topo.nonmanifold_vertices = self.nonmanifold_vertices();
         topo.components = self.components();
@@ -204,32 +209,30 @@ impl Mesh {
                 fill[v] += 1;
             }
         }
-        let mut bad = 0;
-        let mut parent: Vec<usize> = Vec::new();
-        for v in 0..n {
-            let fan = &opp[start[v]..fill[v]];
-            if fan.len() < 2 {
-                continue;
-            }
-            // Union the fan's triangles that share a neighbour vertex.
-            parent.clear();
-            parent.extend(0..fan.len());
-            let mut by_nb: HashMap<u32, usize> = HashMap::with_capacity(fan.len() * 2);
-            for (i, &(b, c)) in fan.iter().enumerate() {
-                for w in [b, c] {
-                    if let Some(&j) = by_nb.get(&w) {
-                        union(&mut parent, i, j);
-                    } else {
-                        by_nb.insert(w, i);
+        (0..n)
+            .into_par_iter()
+            .with_min_len(4096)
+            .filter(|&v| {
+                let fan = &opp[start[v]..fill[v]];
+                if fan.len() < 2 {
+                    return false;
+                }
+                // Grow one fan from the first triangle through shared neighbours.
+                let mut reached = vec![false; fan.len()];
+                reached[0] = true;
+                let mut stack = vec![0usize];
+                while let Some(i) = stack.pop() {
+                    let (b, c) = fan[i];
+                    for (j, &(d, e)) in fan.iter().enumerate() {
+                        if !reached[j] && (d == b || d == c || e == b || e == c) {
+                            reached[j] = true;
+                            stack.push(j);
+                        }
                     }
                 }
-            }
-            let root = find(&mut parent, 0);
-            if (1..fan.len()).any(|i| find(&mut parent, i) != root) {
-                bad += 1;
-            }
-        }
-        bad
+                reached.iter().any(|r| !r)
+            })
+            .count()
     }
 
     /// Connected components through shared vertices.
