@@ -40,7 +40,7 @@ TARGETS=(50k 200k 800k)
 # isoray: --resolution N (cells along the longest side; triangles ~ N^2).
 # First guesses (a marching-cubes grid of N = 2.1 / step cells gives the
 # counts): tune them to the triangle counts isoray actually writes.
-ISO_RES=(60 120 240)
+ISO_RES=(64 128 256)
 # fidget: "DEPTH BOUND": octree depth, meshed cube [-BOUND, BOUND]^3; finest
 # cell 2 BOUND / 2^DEPTH.  Its triangle count is far from smooth in the cell
 # size (it merges cells on flat faces, depending on how they align), so BOUND

@@ -39,6 +39,8 @@ const QEF_TRUNCATION: f64 = 0.02;
 /// Finite-difference step of gradients, as a fraction of the cell: small
 /// enough that only crossings within it of a crease see a blended normal.
 pub(crate) const GRADIENT_STEP: f64 = 1e-6;
+/// Secant steps along a smooth patch's normal onto the surface.
+const LINE_STEPS: usize = 4;
 /// Newton steps that move a vertex onto the surface.
 const PROJECTION_STEPS: usize = 4;
 /// Vertices stay this fraction of a cell inside their cell, so that vertices
@@ -175,19 +177,84 @@ pub(crate) struct Contour {
     pub(crate) feature_vertices: usize,
 }
 
-/// Sorted lattice keys with values.
-struct Samples {
-    keys: Vec<u64>,
-    values: Vec<f64>,
+/// No match in [`lookup`].
+const NONE: u32 = u32::MAX;
+
+/// The position in `sorted` of each of `queries` (which must be sorted too),
+/// or [`NONE`]: a merge walk per parallel chunk, O(n + m) in all, in place
+/// of one binary search per query.
+fn lookup(sorted: &[u64], queries: &[u64]) -> Vec<u32> {
+    let mut out = vec![NONE; queries.len()];
+    out.par_chunks_mut(4096)
+        .zip(queries.par_chunks(4096))
+        .for_each(|(o, q)| {
+            let Some(&first) = q.first() else { return };
+            let mut j = sorted.partition_point(|&k| k < first);
+            for (oi, &qk) in o.iter_mut().zip(q) {
+                while j < sorted.len() && sorted[j] < qk {
+                    j += 1;
+                }
+                if j < sorted.len() && sorted[j] == qk {
+                    *oi = j as u32;
+                }
+            }
+        });
+    out
 }
 
-impl Samples {
-    fn get(&self, k: u64) -> f64 {
-        match self.keys.binary_search(&k) {
-            Ok(i) => self.values[i],
-            Err(_) => f64::INFINITY,
+/// The key offsets of a cell's corners (adding them to a cell's key never
+/// carries, since coordinates stay below 2^KEY_BITS).
+fn corner_keys() -> [u64; 8] {
+    CORNER.map(key)
+}
+
+/// The union of sorted lists, sorted and without repeats (pairwise merges:
+/// each list is sorted already, so nothing is sorted again).
+fn merge_sorted(mut lists: Vec<Vec<u64>>) -> Vec<u64> {
+    fn merge(a: &[u64], b: &[u64]) -> Vec<u64> {
+        let mut out = Vec::with_capacity(a.len() + b.len());
+        let (mut i, mut j) = (0, 0);
+        while i < a.len() && j < b.len() {
+            let v = a[i].min(b[j]);
+            if out.last() != Some(&v) {
+                out.push(v);
+            }
+            i += (a[i] == v) as usize;
+            j += (b[j] == v) as usize;
         }
+        for &v in a[i..].iter().chain(&b[j..]) {
+            if out.last() != Some(&v) {
+                out.push(v);
+            }
+        }
+        out
     }
+    while lists.len() > 1 {
+        lists = lists
+            .par_chunks(2)
+            .map(|p| {
+                if p.len() == 2 {
+                    merge(&p[0], &p[1])
+                } else {
+                    merge(&p[0], &[])
+                }
+            })
+            .collect();
+    }
+    lists.pop().unwrap_or_default()
+}
+
+/// Per-cell work, gathered in parallel chunks and concatenated in order.
+fn par_gather<T: Sync, U: Send>(items: &[T], f: impl Fn(&[T], &mut Vec<U>) + Sync) -> Vec<U> {
+    let parts: Vec<Vec<U>> = items
+        .par_chunks(4096)
+        .map(|chunk| {
+            let mut v = Vec::new();
+            f(chunk, &mut v);
+            v
+        })
+        .collect();
+    parts.into_iter().flatten().collect()
 }
 
 /// Runs dual contouring over the `cells` (sorted keys) of `grid`.
@@ -199,10 +266,9 @@ pub(crate) fn contour(
     ctl: &Control,
 ) -> Result<Contour, MeshError> {
     let active_cells = cells.len();
-    let mut samples = Samples {
-        keys: Vec::new(),
-        values: Vec::new(),
-    };
+    let ck = corner_keys();
+    let mut keys: Vec<u64> = Vec::new();
+    let mut values: Vec<f64> = Vec::new();
     let mut missed_cells = 0;
     let mut cell_values: Vec<[f64; 8]>;
     // Corners and crossed edges; repeated when a crossed edge's neighbour
@@ -210,20 +276,18 @@ pub(crate) fn contour(
     let edges = loop {
         ctl.check()?;
         ctl.progress(Stage::Corners, 0.0);
-        let mut corners: Vec<u64> = cells
-            .par_iter()
-            .flat_map_iter(|&k| {
-                let c = unkey(k);
-                CORNER.iter().map(move |o| key([c[0] + o[0], c[1] + o[1], c[2] + o[2]]))
-            })
-            .collect();
-        corners.par_sort_unstable();
-        corners.dedup();
-        let new: Vec<u64> = corners
-            .iter()
-            .copied()
-            .filter(|k| samples.keys.binary_search(k).is_err())
-            .collect();
+        let corners = merge_sorted(ck.iter().map(|&off| cells.iter().map(|&k| k + off).collect()).collect());
+        let new: Vec<u64> = if keys.is_empty() {
+            corners
+        } else {
+            let found = lookup(&keys, &corners);
+            corners
+                .iter()
+                .zip(found)
+                .filter(|(_, i)| *i == NONE)
+                .map(|(k, _)| *k)
+                .collect()
+        };
         let pts: Vec<[f64; 3]> = new.iter().map(|&k| grid.point(unkey(k))).collect();
         let mut vals = field.values(&pts);
         for (v, &k) in vals.iter_mut().zip(&new) {
@@ -231,50 +295,50 @@ pub(crate) fn contour(
                 *v = v.max(0.0);
             }
         }
-        let mut merged: Vec<(u64, f64)> = samples
-            .keys
-            .iter()
-            .copied()
-            .zip(samples.values.iter().copied())
-            .collect();
-        merged.extend(new.into_iter().zip(vals));
-        merged.par_sort_unstable_by_key(|p| p.0);
-        samples = Samples {
-            keys: merged.iter().map(|p| p.0).collect(),
-            values: merged.iter().map(|p| p.1).collect(),
-        };
+        if keys.is_empty() {
+            keys = new;
+            values = vals;
+        } else {
+            let mut merged: Vec<(u64, f64)> = keys.iter().copied().zip(values.iter().copied()).collect();
+            merged.extend(new.into_iter().zip(vals));
+            merged.par_sort_unstable_by_key(|p| p.0);
+            keys = merged.iter().map(|p| p.0).collect();
+            values = merged.iter().map(|p| p.1).collect();
+        }
         ctl.check()?;
         ctl.progress(Stage::Edges, 0.0);
-        cell_values = cells
-            .par_iter()
-            .map(|&k| {
-                let c = unkey(k);
-                CORNER.map(|o| samples.get(key([c[0] + o[0], c[1] + o[1], c[2] + o[2]])))
-            })
-            .collect();
-        let mut edges: Vec<u64> = cells
-            .par_iter()
-            .zip(&cell_values)
-            .flat_map_iter(|(&k, &v)| {
-                let c = unkey(k);
-                (0..12).filter_map(move |e| {
+        cell_values = vec![[f64::INFINITY; 8]; cells.len()];
+        for (o, &off) in ck.iter().enumerate() {
+            let q: Vec<u64> = cells.iter().map(|&k| k + off).collect();
+            for (cv, i) in cell_values.iter_mut().zip(lookup(&keys, &q)) {
+                if i != NONE {
+                    cv[o] = values[i as usize];
+                }
+            }
+        }
+        // Per local edge, the crossed ones in cell order: sorted lists.
+        let edges = merge_sorted(
+            (0..12)
+                .into_par_iter()
+                .map(|e| {
                     let (c0, c1) = edge_corners(e);
-                    ((v[c0] < 0.0) != (v[c1] < 0.0)).then(|| {
-                        let o = CORNER[c0];
-                        edge_key([c[0] + o[0], c[1] + o[1], c[2] + o[2]], e / 4)
-                    })
+                    cells
+                        .iter()
+                        .zip(&cell_values)
+                        .filter(|(_, v)| (v[c0] < 0.0) != (v[c1] < 0.0))
+                        .map(|(&k, _)| (k + ck[c0]) << 2 | (e / 4) as u64)
+                        .collect()
                 })
-            })
+                .collect(),
+        );
+        // The cells around each crossed edge.
+        let around = merge_sorted(edge_sides(&edges).into_iter().map(|s| s.cells).collect());
+        let missing: Vec<u64> = around
+            .iter()
+            .zip(lookup(&cells, &around))
+            .filter(|(_, i)| *i == NONE)
+            .map(|(k, _)| *k)
             .collect();
-        edges.par_sort_unstable();
-        edges.dedup();
-        let mut missing: Vec<u64> = edges
-            .par_iter()
-            .flat_map_iter(|&ek| edge_cells(ek).into_iter().flatten())
-            .filter(|k| cells.binary_search(k).is_err())
-            .collect();
-        missing.sort_unstable();
-        missing.dedup();
         if missing.is_empty() {
             break edges;
         }
@@ -282,28 +346,45 @@ pub(crate) fn contour(
         cells.extend(missing);
         cells.sort_unstable();
     };
+    let value_at = |q: &[u64]| -> Vec<f64> {
+        lookup(&keys, q)
+            .into_iter()
+            .map(|i| if i == NONE { f64::INFINITY } else { values[i as usize] })
+            .collect()
+    };
 
-    // Crossings: point and normal on every crossed edge.
+    // Crossings: point and normal on every crossed edge. The values at the
+    // edges' ends: lower ends in edge order; upper ends per axis, in order.
     ctl.check()?;
     ctl.progress(Stage::Edges, 0.5);
-    let crossings: Vec<([f64; 3], [f64; 3])> = edges
+    let lower: Vec<u64> = edges.iter().map(|&ek| ek >> 2).collect();
+    let f_lower = value_at(&lower);
+    let mut f_upper = vec![f64::INFINITY; edges.len()];
+    for a in 0..3 {
+        let unit = key(std::array::from_fn(|k| (k == a) as u32));
+        let idx: Vec<usize> = (0..edges.len()).filter(|&i| (edges[i] & 3) as usize == a).collect();
+        let q: Vec<u64> = idx.iter().map(|&i| lower[i] + unit).collect();
+        for (&i, f) in idx.iter().zip(value_at(&q)) {
+            f_upper[i] = f;
+        }
+    }
+    let edge_ends: Vec<([f64; 3], f64, [f64; 3], f64)> = (0..edges.len())
+        .map(|i| {
+            let (c, a) = edge_unkey(edges[i]);
+            let mut c1 = c;
+            c1[a] += 1;
+            (grid.point(c), f_lower[i], grid.point(c1), f_upper[i])
+        })
+        .collect();
+    let crossings: Vec<([f64; 3], [f64; 3])> = edge_ends
         .par_chunks(CHUNK)
         .map_init(
             || BatchEvaluator::<f64>::new(field.tape()),
-            |batch, chunk| {
+            |batch, ends| {
                 if ctl.cancelled() {
                     return Vec::new();
                 }
-                let ends: Vec<([f64; 3], f64, [f64; 3], f64)> = chunk
-                    .iter()
-                    .map(|&ek| {
-                        let (c, a) = edge_unkey(ek);
-                        let mut c1 = c;
-                        c1[a] += 1;
-                        (grid.point(c), samples.get(key(c)), grid.point(c1), samples.get(key(c1)))
-                    })
-                    .collect();
-                let points = crossings(field, batch, &ends);
+                let points = crossings(field, batch, ends);
                 let mut grads = Vec::new();
                 field.gradients_with(batch, &points, GRADIENT_STEP * grid.h, &mut grads);
                 points
@@ -317,50 +398,54 @@ pub(crate) fn contour(
         .collect();
     ctl.check()?;
 
-    // One vertex per patch of each cell with a crossed edge.
+    // One vertex per patch of each cell with a crossed edge. First, each
+    // cell's edges' places in `edges`.
     ctl.progress(Stage::Vertices, 0.0);
+    let mut cell_edges = vec![[NONE; 12]; cells.len()];
+    for e in 0..12 {
+        let off = ck[edge_corners(e).0];
+        let q: Vec<u64> = cells.iter().map(|&k| (k + off) << 2 | (e / 4) as u64).collect();
+        for (ce, i) in cell_edges.iter_mut().zip(lookup(&edges, &q)) {
+            ce[e] = i;
+        }
+    }
     let cos_feature = feature_angle_deg.to_radians().cos();
     struct CellOut {
         key: u64,
         patch: [u8; 12],
-        vertices: Vec<[f64; 3]>,
+        count: u8,
         features: usize,
     }
-    let cell_out: Vec<CellOut> = cells
+    let indexed: Vec<usize> = (0..cells.len()).collect();
+    let placed: Vec<(Vec<CellOut>, Vec<[f64; 3]>)> = indexed
         .par_chunks(CHUNK)
-        .zip(cell_values.par_chunks(CHUNK))
         .map_init(
             || BatchEvaluator::<f64>::new(field.tape()),
-            |batch, (chunk, values)| {
+            |batch, chunk| {
                 let mut out = Vec::new();
                 if ctl.cancelled() {
-                    return out;
+                    return (out, Vec::new());
                 }
-                // Start points (QEF fit or mass point) and their cells.
+                // Start points (QEF fit or mass point), their cells and directions.
                 let mut starts: Vec<[f64; 3]> = Vec::new();
                 let mut lows: Vec<[f64; 3]> = Vec::new();
-                for (&k, v) in chunk.iter().zip(values) {
-                    let c = unkey(k);
-                    let (patch, n) = cell_patches(v);
+                let mut dirs: Vec<Option<[f64; 3]>> = Vec::new();
+                for &ci in chunk {
+                    let (patch, n) = cell_patches(&cell_values[ci]);
                     if n == 0 {
                         continue;
                     }
-                    let lo = grid.point(c);
+                    let lo = grid.point(unkey(cells[ci]));
                     let mut features = 0;
                     for p in 0..n {
                         let mut q = Qef::default();
                         let mut normals: Vec<[f64; 3]> = Vec::with_capacity(6);
                         for e in 0..12 {
-                            if patch[e] != p {
+                            let i = cell_edges[ci][e];
+                            if patch[e] != p || i == NONE {
                                 continue;
                             }
-                            let a = e / 4;
-                            let o = CORNER[edge_corners(e).0];
-                            let ek = edge_key([c[0] + o[0], c[1] + o[1], c[2] + o[2]], a);
-                            let Ok(i) = edges.binary_search(&ek) else {
-                                continue;
-                            };
-                            let (pt, nm) = crossings[i];
+                            let (pt, nm) = crossings[i as usize];
                             if nm == [0.0; 3] {
                                 q.add_point(pt);
                                 continue;
@@ -376,90 +461,81 @@ pub(crate) fn contour(
                         // curved feature that point is off the surface by
                         // O(h²κ), so it is projected too (a true edge or
                         // corner is on the surface already and stays).
-                        let x = if sharp {
+                        let (x, dir) = if sharp {
                             features += 1;
-                            q.solve(QEF_TRUNCATION)
+                            (q.solve(QEF_TRUNCATION), None)
                         } else {
-                            q.mass_point()
+                            let mut m = [0.0; 3];
+                            for v in &normals {
+                                m = [m[0] + v[0], m[1] + v[1], m[2] + v[2]];
+                            }
+                            let m = normalize(m);
+                            (q.mass_point(), (m != [0.0; 3]).then_some(m))
                         };
                         starts.push(x);
                         lows.push(lo);
+                        dirs.push(dir);
                     }
                     out.push(CellOut {
-                        key: k,
+                        key: cells[ci],
                         patch,
-                        vertices: Vec::new(),
+                        count: n,
                         features,
                     });
                 }
-                let mut placed = project(field, batch, &starts, &lows, grid.h).into_iter();
-                for c in &mut out {
-                    let n = c
-                        .patch
-                        .iter()
-                        .filter(|&&p| p != 255)
-                        .max()
-                        .map_or(0, |&p| p as usize + 1);
-                    c.vertices.extend(placed.by_ref().take(n));
-                }
-                out
+                (out, place(field, batch, &starts, &dirs, &lows, grid.h))
             },
         )
-        .flatten()
         .collect();
     ctl.check()?;
-    let mut first = Vec::with_capacity(cell_out.len());
+    let mut first = Vec::new();
     let mut positions = Vec::new();
     let mut feature_vertices = 0;
-    for c in &cell_out {
-        first.push(positions.len() as u32);
-        positions.extend_from_slice(&c.vertices);
-        feature_vertices += c.features;
+    let mut cell_out = Vec::new();
+    for (cs, ps) in placed {
+        let mut k = positions.len() as u32;
+        for c in &cs {
+            first.push(k);
+            k += c.count as u32;
+            feature_vertices += c.features;
+        }
+        positions.extend(ps);
+        cell_out.extend(cs);
     }
     let cell_keys: Vec<u64> = cell_out.iter().map(|c| c.key).collect();
-    let vertex_of = |cell: [u32; 3], e: usize| -> Option<u32> {
-        let i = cell_keys.binary_search(&key(cell)).ok()?;
-        let p = cell_out[i].patch[e];
-        (p != 255).then(|| first[i] + p as u32)
-    };
 
-    // One quad per crossed edge.
+    // One quad per crossed edge: its four cells' patches, found per axis and
+    // corner of the quad (each a sorted query).
     ctl.progress(Stage::Faces, 0.0);
-    let triangles: Vec<[u32; 3]> = edges
-        .par_chunks(CHUNK)
-        .map(|chunk| {
-            let mut out = Vec::with_capacity(chunk.len() * 2);
-            for &ek in chunk {
-                let (c, a) = edge_unkey(ek);
-                let Some(cells4) = edge_cells(ek) else { continue };
-                let quad: Option<Vec<u32>> = cells4
-                    .iter()
-                    .map(|&ck| {
-                        let cc = unkey(ck);
-                        let mut o = [0u32; 3];
-                        for k in 0..3 {
-                            o[k] = c[k] - cc[k];
-                        }
-                        vertex_of(cc, edge_index(a, o))
-                    })
-                    .collect();
-                let Some(mut q) = quad else { continue };
-                let inside_start = samples.get(key(c)) < 0.0;
-                if !inside_start {
-                    q.reverse();
-                }
-                let q = [q[0], q[1], q[2], q[3]];
-                let axis = {
-                    let mut d = [0.0; 3];
-                    d[a] = if inside_start { 1.0 } else { -1.0 };
-                    d
-                };
-                out.extend(split_quad(&positions, q, axis));
+    let mut quads = vec![[NONE; 4]; edges.len()];
+    for side in edge_sides(&edges) {
+        for (&i, ci) in side.edges.iter().zip(lookup(&cell_keys, &side.cells)) {
+            if ci == NONE {
+                continue;
             }
-            out
-        })
-        .flatten()
-        .collect();
+            let p = cell_out[ci as usize].patch[side.local];
+            if p != 255 {
+                quads[i][side.corner] = first[ci as usize] + p as u32;
+            }
+        }
+    }
+    let order: Vec<usize> = (0..edges.len()).collect();
+    let triangles: Vec<[u32; 3]> = par_gather(&order, |chunk, out| {
+        for &i in chunk {
+            let mut q = quads[i];
+            if q.contains(&NONE) {
+                continue;
+            }
+            let a = (edges[i] & 3) as usize;
+            let inside_start = f_lower[i] < 0.0;
+            if !inside_start {
+                q.reverse();
+            }
+            let mut axis = [0.0; 3];
+            axis[a] = if inside_start { 1.0 } else { -1.0 };
+            out.extend(split_quad(&positions, q, axis));
+        }
+    });
     ctl.progress(Stage::Faces, 1.0);
     Ok(Contour {
         positions,
@@ -470,30 +546,54 @@ pub(crate) fn contour(
     })
 }
 
-/// Packs an edge: its lower corner and its axis.
-fn edge_key(c: [u32; 3], a: usize) -> u64 {
-    key(c) << 2 | a as u64
-}
-
+/// An edge key (lower corner << 2 | axis) as corner and axis.
 fn edge_unkey(k: u64) -> ([u32; 3], usize) {
     (unkey(k >> 2), (k & 3) as usize)
 }
 
-/// The four cells around an edge, in counter-clockwise order seen from the
-/// edge's positive end (None at the lattice's low sides).
-fn edge_cells(ek: u64) -> Option<[u64; 4]> {
-    let (c, a) = edge_unkey(ek);
-    let (b, d) = ((a + 1) % 3, (a + 2) % 3);
-    if c[b] == 0 || c[d] == 0 {
-        return None;
+/// One of the four cells around the crossed edges along one axis.
+struct EdgeSide {
+    /// Which corner of the edges' quads (0..4, counter-clockwise seen from
+    /// the edges' positive ends).
+    corner: usize,
+    /// The edges' index in the edge list, in order.
+    edges: Vec<usize>,
+    /// The cell on this side of each of those edges (sorted keys).
+    cells: Vec<u64>,
+    /// The edges' local index in those cells.
+    local: usize,
+}
+
+/// The cells around the crossed edges (sorted keys), per axis and quad
+/// corner; edges on the lattice's low sides have no cells there.
+fn edge_sides(edges: &[u64]) -> Vec<EdgeSide> {
+    let mut sides = Vec::with_capacity(12);
+    for a in 0..3 {
+        let (b, d) = ((a + 1) % 3, (a + 2) % 3);
+        let along: Vec<usize> = (0..edges.len()).filter(|&i| (edges[i] & 3) as usize == a).collect();
+        for (corner, (db, dd)) in [(1u32, 1u32), (0, 1), (0, 0), (1, 0)].into_iter().enumerate() {
+            let mut off = [0u32; 3];
+            off[b] = db;
+            off[d] = dd;
+            let off_key = key(off);
+            let kept: Vec<usize> = along
+                .iter()
+                .copied()
+                .filter(|&i| {
+                    let c = unkey(edges[i] >> 2);
+                    c[b] >= db && c[d] >= dd
+                })
+                .collect();
+            let cells = kept.iter().map(|&i| (edges[i] >> 2) - off_key).collect();
+            sides.push(EdgeSide {
+                corner,
+                edges: kept,
+                cells,
+                local: edge_index(a, off),
+            });
+        }
     }
-    let at = |db: u32, dd: u32| {
-        let mut o = c;
-        o[b] -= db;
-        o[d] -= dd;
-        key(o)
-    };
-    Some([at(1, 1), at(0, 1), at(0, 0), at(1, 0)])
+    sides
 }
 
 /// Where the field crosses zero on each segment p0–p1 whose end values f0,
@@ -578,6 +678,96 @@ fn crossings<'t>(
         }
     }
     br.iter().zip(ends).map(|(b, e)| at(e, b.t)).collect()
+}
+
+/// Moves start points onto the surface, inside their cells: along the
+/// patch's mean normal by a secant search where one is given (smooth
+/// patches: one value per step), else by Newton steps along the gradient
+/// (sharp patches).
+fn place<'t>(
+    field: &Field<'t>,
+    ev: &mut BatchEvaluator<'t, f64>,
+    starts: &[[f64; 3]],
+    dirs: &[Option<[f64; 3]>],
+    lows: &[[f64; 3]],
+    h: f64,
+) -> Vec<[f64; 3]> {
+    let mut out: Vec<[f64; 3]> = starts
+        .iter()
+        .zip(lows)
+        .map(|(&x, &lo)| clamp_to_cell(x, lo, h))
+        .collect();
+    // Line searches: x(s) = start + s·n, secant on f(x(s)).
+    struct Line {
+        i: usize,
+        n: [f64; 3],
+        s: f64,
+        prev: Option<(f64, f64)>,
+    }
+    let mut lines: Vec<Line> = Vec::new();
+    let mut newton: Vec<usize> = Vec::new();
+    for (i, d) in dirs.iter().enumerate() {
+        match d {
+            Some(n) => lines.push(Line {
+                i,
+                n: *n,
+                s: 0.0,
+                prev: None,
+            }),
+            None => newton.push(i),
+        }
+    }
+    let tiny = 1e-7 * h;
+    let mut pts = Vec::new();
+    let mut vals = Vec::new();
+    for _ in 0..LINE_STEPS {
+        if lines.is_empty() {
+            break;
+        }
+        pts.clear();
+        pts.extend(lines.iter().map(|l| out[l.i]));
+        field.values_with(ev, &pts, &mut vals);
+        let mut still = Vec::with_capacity(lines.len());
+        for (mut l, &f) in lines.into_iter().zip(&vals) {
+            if !f.is_finite() || f.abs() <= tiny {
+                continue;
+            }
+            // Secant on the previous sample, or a unit-slope step (a distance field).
+            let slope = match l.prev {
+                Some((s0, f0)) if (f - f0).abs() > 0.0 && l.s != s0 => (f - f0) / (l.s - s0),
+                _ => 1.0,
+            };
+            if slope.abs() <= 1e-6 || slope.is_nan() {
+                continue;
+            }
+            let s_next = l.s - f / slope;
+            if (s_next - l.s).abs() > 2.0 * h {
+                continue;
+            }
+            l.prev = Some((l.s, f));
+            l.s = s_next;
+            let st = starts[l.i];
+            let next = clamp_to_cell(
+                [st[0] + l.s * l.n[0], st[1] + l.s * l.n[1], st[2] + l.s * l.n[2]],
+                lows[l.i],
+                h,
+            );
+            let moved = dot(sub(next, out[l.i]), sub(next, out[l.i]));
+            out[l.i] = next;
+            if moved > 1e-20 * h * h {
+                still.push(l);
+            }
+        }
+        lines = still;
+    }
+    if !newton.is_empty() {
+        let s: Vec<[f64; 3]> = newton.iter().map(|&i| out[i]).collect();
+        let l: Vec<[f64; 3]> = newton.iter().map(|&i| lows[i]).collect();
+        for (&i, p) in newton.iter().zip(project(field, ev, &s, &l, h)) {
+            out[i] = p;
+        }
+    }
+    out
 }
 
 /// Newton steps along the gradient towards the surface, for many points
