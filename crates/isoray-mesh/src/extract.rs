@@ -132,8 +132,12 @@ pub fn mesh_shape_with(tape: &Tape, settings: &MeshSettings, ctl: &Control) -> R
     let cells = active_cells(&field, &grid, settings.lipschitz, ctl)?;
     mark(Stage::Octree, &mut lap);
     let c = contour(&field, &grid, cells, settings.feature_angle_deg, ctl)?;
-    if c.triangles.is_empty() && c.active_cells > 0 {
-        return Err(MeshError::NoSignChange);
+    if c.triangles.is_empty() {
+        return Err(if c.active_cells > 0 {
+            MeshError::NoSignChange
+        } else {
+            MeshError::NoSurface
+        });
     }
     mark(Stage::Faces, &mut lap);
 
@@ -164,9 +168,39 @@ pub fn mesh_shape_with(tape: &Tape, settings: &MeshSettings, ctl: &Control) -> R
     let n = finish.len().max(1) as f64;
     let max_error = finish.iter().fold(0.0f64, |m, x| m.max(x.1));
     let rms_error = (finish.iter().map(|x| x.1 * x.1).sum::<f64>() / n).sqrt();
+    // Where the gradient vanishes (a cone's apex, the middle of a symmetric
+    // kink), the normal is the area-weighted mean of the triangles' normals.
+    let mut normals: Vec<[f64; 3]> = finish.iter().map(|x| x.0).collect();
+    if normals.contains(&[0.0; 3]) {
+        let missing: Vec<bool> = normals.iter().map(|n| *n == [0.0; 3]).collect();
+        for t in &c.triangles {
+            if !t.iter().any(|&v| missing[v as usize]) {
+                continue;
+            }
+            let [a, b, d] = t.map(|v| c.positions[v as usize]);
+            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let w = [d[0] - a[0], d[1] - a[1], d[2] - a[2]];
+            let n = [
+                u[1] * w[2] - u[2] * w[1],
+                u[2] * w[0] - u[0] * w[2],
+                u[0] * w[1] - u[1] * w[0],
+            ];
+            for &v in t {
+                if missing[v as usize] {
+                    let m = &mut normals[v as usize];
+                    *m = [m[0] + n[0], m[1] + n[1], m[2] + n[2]];
+                }
+            }
+        }
+        for (n, &m) in normals.iter_mut().zip(&missing) {
+            if m {
+                *n = normalize(*n);
+            }
+        }
+    }
     let mesh = Mesh {
         positions: c.positions.iter().map(|p| p.map(|v| v as f32)).collect(),
-        normals: finish.iter().map(|x| x.0.map(|v| v as f32)).collect(),
+        normals: normals.iter().map(|n| n.map(|v| v as f32)).collect(),
         uvs: Vec::new(),
         triangles: c.triangles,
         materials: Vec::new(),

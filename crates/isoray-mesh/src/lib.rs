@@ -42,8 +42,8 @@ pub enum MeshError {
     /// A setting is out of range.
     #[error("{0}")]
     Settings(String),
-    /// The shape has no surface within the search cube.
-    #[error("the shape has no surface within ±{SEARCH_RADIUS} of the origin")]
+    /// The shape has no surface within the search cube (or the given box).
+    #[error("the shape has no surface in the box (or, without one, within ±{SEARCH_RADIUS} of the origin)")]
     NoSurface,
     /// The surface reaches the search cube: give bounds.
     #[error("the shape is unbounded (its surface reaches ±{SEARCH_RADIUS}): give bounds to mesh a part of it")]

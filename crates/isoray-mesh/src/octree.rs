@@ -89,6 +89,9 @@ impl Grid {
     }
 }
 
+/// The most cells one octree level may keep (about 1 GiB of work space).
+pub(crate) const MAX_CELLS: usize = 64 << 20;
+
 /// The finest cells (as sorted keys of their lowest corner) that the
 /// surface of `field` may cross, by breadth-first descent from the root.
 ///
@@ -143,6 +146,12 @@ pub(crate) fn active_cells(field: &Field, grid: &Grid, lipschitz: f64, ctl: &Con
                     next.push(cc);
                 }
             }
+        }
+        if next.len() > MAX_CELLS {
+            return Err(MeshError::Settings(format!(
+                "the surface crosses more than {MAX_CELLS} cells at this resolution (cell size {:.3e}); lower the resolution or mesh a smaller box",
+                grid.h
+            )));
         }
         level = next;
         size = child;

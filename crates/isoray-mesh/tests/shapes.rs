@@ -126,3 +126,109 @@ fn a_thin_onion_shell_is_two_closed_surfaces() {
     let v = 4.0 / 3.0 * PI * (1.05f64.powi(3) - 0.95f64.powi(3));
     assert!((m.volume() - v).abs() < 0.02 * v, "{} vs {v}", m.volume());
 }
+
+#[test]
+fn normals_are_the_gradient() {
+    let c = [0.013, -0.021, 0.007];
+    let (m, _) = mesh_text("sphere(p - vec3(0.013, -0.021, 0.007), 1.0)", 32);
+    for (p, n) in m.positions.iter().zip(&m.normals) {
+        let r: Vec<f64> = (0..3).map(|k| p[k] as f64 - c[k]).collect();
+        let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+        let cos: f64 = (0..3).map(|k| r[k] / len * n[k] as f64).sum();
+        assert!(cos > 1.0 - 1e-6, "normal {n:?} at {p:?}");
+    }
+}
+
+#[test]
+fn the_mesh_is_the_same_whatever_the_thread_count() {
+    let text = "smooth_union(torus(p, 1.0, 0.3), box(p - vec3(0.0, 0.5, 0.0), vec3(0.4)), 0.2)";
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| mesh_text(text, 40).0)
+    };
+    let one = run(1);
+    assert!(one.topology().is_closed_manifold());
+    assert_eq!(one, run(3));
+}
+
+#[test]
+fn cancelling_stops_meshing() {
+    use isoray_mesh::{mesh_shape_with, Control, MeshError, Stage};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let shape = compile(&Library::new(), "sphere(p, 1.0)").unwrap();
+    let cancel = AtomicBool::new(false);
+    // Cancel as soon as the octree starts; the stages seen before it are reported.
+    let seen = std::sync::Mutex::new(Vec::new());
+    let progress = |stage: Stage, _f: f64| {
+        seen.lock().unwrap().push(stage);
+        if stage == Stage::Octree {
+            cancel.store(true, Ordering::Relaxed);
+        }
+    };
+    let ctl = Control::new(Some(&progress), Some(&cancel));
+    let settings = MeshSettings {
+        resolution: 256,
+        ..MeshSettings::default()
+    };
+    assert_eq!(
+        mesh_shape_with(shape.tape(), &settings, &ctl).unwrap_err(),
+        MeshError::Cancelled
+    );
+    assert!(seen.lock().unwrap().contains(&Stage::Bounds));
+}
+
+#[test]
+fn bad_settings_are_errors_not_panics() {
+    let shape = compile(&Library::new(), "sphere(p, 1.0)").unwrap();
+    let bad = [
+        MeshSettings {
+            resolution: 1,
+            ..MeshSettings::default()
+        },
+        MeshSettings {
+            lipschitz: 0.5,
+            ..MeshSettings::default()
+        },
+        MeshSettings {
+            feature_angle_deg: f64::NAN,
+            ..MeshSettings::default()
+        },
+        MeshSettings {
+            offset: f64::INFINITY,
+            ..MeshSettings::default()
+        },
+        MeshSettings {
+            bounds: Some([[1.0; 3], [0.0; 3]]),
+            ..MeshSettings::default()
+        },
+        MeshSettings {
+            resolution: 1 << 30,
+            ..MeshSettings::default()
+        },
+    ];
+    for s in bad {
+        assert!(
+            matches!(mesh_shape(shape.tape(), &s), Err(isoray_mesh::MeshError::Settings(_))),
+            "{s:?}"
+        );
+    }
+    // No surface in the search cube, none in the given box, and an unbounded one.
+    let far = compile(&Library::new(), "sphere(p - vec3(50000.0, 0.0, 0.0), 1.0)").unwrap();
+    assert_eq!(
+        mesh_shape(far.tape(), &MeshSettings::default()).unwrap_err(),
+        isoray_mesh::MeshError::NoSurface
+    );
+    let boxed = MeshSettings {
+        bounds: Some([[-1.0; 3], [1.0; 3]]),
+        ..MeshSettings::default()
+    };
+    assert_eq!(
+        mesh_shape(far.tape(), &boxed).unwrap_err(),
+        isoray_mesh::MeshError::NoSurface
+    );
+    let plane = compile(&Library::new(), "p.y").unwrap();
+    assert_eq!(
+        mesh_shape(plane.tape(), &MeshSettings::default()).unwrap_err(),
+        isoray_mesh::MeshError::Unbounded
+    );
+}

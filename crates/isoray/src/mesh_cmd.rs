@@ -32,6 +32,9 @@ pub(crate) struct MeshArgs<'a> {
     pub quiet: bool,
 }
 
+/// The finest base grid of a parametric tessellation (cells per side).
+const MAX_PARAMETRIC_GRID: u32 = 2048;
+
 /// Set by Ctrl-C: the mesher stops at its next check.
 static CANCEL: AtomicBool = AtomicBool::new(false);
 
@@ -265,6 +268,11 @@ fn mesh_parametric(a: &MeshArgs, scene: &Scene, name: &str, format: Format, star
         .map_err(|d| usage(d.message.clone()))?;
     let mut settings = TessellationSettings::default();
     if let Some(r) = a.resolution {
+        if r > MAX_PARAMETRIC_GRID {
+            return Err(usage(format!(
+                "--resolution {r} is too fine for a parametric surface's base grid: at most {MAX_PARAMETRIC_GRID} (refinement adds detail where it is needed)"
+            )));
+        }
         settings.initial = [r, r];
     }
     settings.tolerance = a.tolerance;
