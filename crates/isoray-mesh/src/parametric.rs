@@ -11,7 +11,9 @@
 //!    average of the edge's two corners) and at its centre (against the
 //!    average of the four corners, and against the midpoint of the diagonal
 //!    the cell would be cut along) — or while the normals at its corners
-//!    differ by more than [`TessellationSettings::max_angle_deg`], up to
+//!    differ by more than [`TessellationSettings::max_angle_deg`], or while
+//!    a side of the cell is longer in space than
+//!    [`TessellationSettings::max_edge`], up to
 //!    [`TessellationSettings::max_depth`] levels. A cell where the surface is
 //!    finite at some but not all of those nine points is split too, so that
 //!    the hole left where it is not finite hugs that region.
@@ -95,6 +97,10 @@ pub struct TessellationSettings {
     /// The largest angle, in degrees, between the normals at a cell's
     /// corners (180 or more turns the test off).
     pub max_angle_deg: f64,
+    /// The longest a cell's side may be in space, in world units, where the
+    /// parametrization stretches the domain. `None`: 1/20 of the diagonal of
+    /// the bounding box of the base grid's samples.
+    pub max_edge: Option<f64>,
 }
 
 impl Default for TessellationSettings {
@@ -106,6 +112,7 @@ impl Default for TessellationSettings {
             max_depth: 6,
             tolerance: None,
             max_angle_deg: 15.0,
+            max_edge: None,
         }
     }
 }
@@ -165,6 +172,8 @@ const MAX_LATTICE: u64 = 1 << 31;
 
 /// Chord tolerance relative to the bounding-box diagonal when none is given.
 const DEFAULT_RELATIVE_TOLERANCE: f64 = 1e-3;
+/// Longest cell side relative to the bounding-box diagonal when none is given.
+const DEFAULT_RELATIVE_EDGE: f64 = 0.05;
 
 /// ∂P/∂s × ∂P/∂t counts as zero below this times |∂P/∂s|² + |∂P/∂t|².
 const DEGENERATE_JACOBIAN: f64 = 1e-12;
@@ -404,7 +413,7 @@ fn first_diagonal(c00: [f64; 3], c10: [f64; 3], c11: [f64; 3], c01: [f64; 3]) ->
 }
 
 /// Whether a cell's chord error or normal spread calls for a split.
-fn needs_split(samples: &Samples, grid: &Grid, c: Cell, tol: f64, cos_max: f64) -> bool {
+fn needs_split(samples: &Samples, grid: &Grid, c: Cell, tol: f64, cos_max: f64, max_edge: f64) -> bool {
     let s = grid.nine(c).map(|k| *samples.get(k));
     let finite = s.iter().filter(|x| x.finite()).count();
     if finite == 0 {
@@ -430,6 +439,13 @@ fn needs_split(samples: &Samples, grid: &Grid, c: Cell, tol: f64, cos_max: f64) 
         dist(p[4], diag),
     ];
     if err.iter().any(|&e| e > tol) {
+        return true;
+    }
+    // Samples too far apart in space.
+    if [(c00, c10), (c10, c11), (c11, c01), (c01, c00)]
+        .iter()
+        .any(|&(a, b)| dist(a, b) > max_edge)
+    {
         return true;
     }
     let normals: Vec<[f64; 3]> = [s[0], s[2], s[8], s[6]].iter().filter_map(|x| x.n).collect();
@@ -609,6 +625,13 @@ fn check_settings(coords: &ParametricCoords, settings: &TessellationSettings) ->
             )));
         }
     }
+    if let Some(e) = settings.max_edge {
+        if !(e.is_finite() && e > 0.0) {
+            return Err(TessellateError::InvalidSettings(format!(
+                "the longest edge must be a finite number > 0, found {e}"
+            )));
+        }
+    }
     if settings.max_angle_deg.is_nan() || settings.max_angle_deg <= 0.0 {
         return Err(TessellateError::InvalidSettings(format!(
             "the largest angle between normals must be above 0°, found {}°",
@@ -672,6 +695,9 @@ pub fn tessellate(
     let tol = settings
         .tolerance
         .unwrap_or_else(|| DEFAULT_RELATIVE_TOLERANCE * dist(hi, lo));
+    let max_edge = settings
+        .max_edge
+        .unwrap_or_else(|| DEFAULT_RELATIVE_EDGE * dist(hi, lo));
     let cos_max = if settings.max_angle_deg >= 180.0 {
         -2.0
     } else {
@@ -688,7 +714,7 @@ pub fn tessellate(
         samples.ensure(&grid, frontier.iter().flat_map(|&c| grid.nine(c)).collect());
         let decisions: Vec<bool> = frontier
             .par_iter()
-            .map(|&c| needs_split(&samples, &grid, c, tol, cos_max))
+            .map(|&c| needs_split(&samples, &grid, c, tol, cos_max, max_edge))
             .collect();
         let mut next = Vec::new();
         for (&c, d) in frontier.iter().zip(decisions) {

@@ -111,9 +111,11 @@ fn a_sphere_lies_on_the_sphere_with_outward_normals_and_converging_area() {
     let c = sphere();
     let mut errors = Vec::new();
     for tol in [3e-2, 1e-2, 3e-3, 1e-3] {
+        // Only the chord tolerance decides here.
         let settings = TessellationSettings {
             tolerance: Some(tol),
             max_angle_deg: 180.0,
+            max_edge: Some(1e9),
             ..Default::default()
         };
         let (m, st) = run(&c, &settings);
@@ -422,4 +424,25 @@ fn bad_domains_settings_and_surfaces_are_errors() {
         tessellate(&nowhere, &TessellationSettings::default()),
         Err(TessellateError::NotFinite { .. })
     ));
+}
+
+#[test]
+fn stretched_cells_are_split_until_their_sides_are_short() {
+    // x = 10 s over [0, 1]: the base grid's cells are 10/16 long in x.
+    let c = coords(["10.0 * s", "t", "0.0"], [[0.0, 1.0], [0.0, 1.0]]);
+    let settings = TessellationSettings {
+        max_edge: Some(0.2),
+        ..Default::default()
+    };
+    let (m, st) = run(&c, &settings);
+    assert!(st.max_depth_reached >= 2, "{st:?}");
+    for t in &m.triangles {
+        for k in 0..3 {
+            let (a, b) = (m.positions[t[k] as usize], m.positions[t[(k + 1) % 3] as usize]);
+            let (dx, dy) = ((a[0] - b[0]) as f64, (a[1] - b[1]) as f64);
+            // Cell sides at most 0.2, so triangle edges at most a diagonal.
+            assert!((dx * dx + dy * dy).sqrt() <= 0.2 * 2f64.sqrt() + 1e-6);
+        }
+    }
+    assert_crack_free(&m, [[0.0, 1.0], [0.0, 1.0]]);
 }
