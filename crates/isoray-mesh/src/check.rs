@@ -13,34 +13,51 @@ use std::collections::HashMap;
 
 /// The pairs of triangles (by index, smaller first) that intersect, sorted.
 pub fn self_intersections(mesh: &Mesh) -> Vec<(u32, u32)> {
-    let n = mesh.triangles.len();
+    let positions: Vec<[f64; 3]> = mesh.positions.iter().map(|p| p.map(f64::from)).collect();
+    crossing_pairs(&positions, &mesh.triangles, None)
+}
+
+/// The crossing pairs of triangles; with `candidate`, only pairs in which at
+/// least one triangle is a candidate (the bins hold candidates only, and
+/// every triangle is tested against the candidates whose bins it overlaps).
+pub(crate) fn crossing_pairs(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    candidate: Option<&[bool]>,
+) -> Vec<(u32, u32)> {
+    let n = triangles.len();
     if n < 2 {
         return Vec::new();
     }
-    let tris: Vec<[[f64; 3]; 3]> = (0..n).map(|i| mesh.corners(i)).collect();
-    let boxes: Vec<[[f64; 3]; 2]> = tris
-        .iter()
-        .map(|t| {
-            let mut b = [t[0], t[0]];
-            for p in &t[1..] {
-                for k in 0..3 {
-                    b[0][k] = b[0][k].min(p[k]);
-                    b[1][k] = b[1][k].max(p[k]);
-                }
+    let is_candidate = |i: usize| candidate.is_none_or(|c| c[i]);
+    let corners = |i: usize| triangles[i].map(|v| positions[v as usize]);
+    let bbox = |i: usize| {
+        let t = corners(i);
+        let mut b = [t[0], t[0]];
+        for p in &t[1..] {
+            for k in 0..3 {
+                b[0][k] = b[0][k].min(p[k]);
+                b[1][k] = b[1][k].max(p[k]);
             }
-            b
-        })
-        .collect();
-    // Bin size: twice the mean box extent.
-    let mean: f64 = boxes
-        .iter()
-        .map(|b| (0..3).map(|k| b[1][k] - b[0][k]).fold(0.0, f64::max))
-        .sum::<f64>()
-        / n as f64;
-    let size = (2.0 * mean).max(1e-12);
+        }
+        b
+    };
+    let extent = |i: usize| {
+        let b = bbox(i);
+        (0..3).map(|k| b[1][k] - b[0][k]).fold(0.0, f64::max)
+    };
+    // Bin size: twice the mean box extent (of the candidates, when given).
+    let (sum, count) = (0..n)
+        .filter(|&i| is_candidate(i))
+        .fold((0.0, 0usize), |(s, c), i| (s + extent(i), c + 1));
+    if count == 0 {
+        return Vec::new();
+    }
+    let size = (2.0 * sum / count as f64).max(1e-12);
     let bin = |p: [f64; 3]| p.map(|v| (v / size).floor() as i64);
     let mut bins: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-    for (i, b) in boxes.iter().enumerate() {
+    for i in (0..n).filter(|&i| is_candidate(i)) {
+        let b = bbox(i);
         let (lo, hi) = (bin(b[0]), bin(b[1]));
         for x in lo[0]..=hi[0] {
             for y in lo[1]..=hi[1] {
@@ -50,25 +67,39 @@ pub fn self_intersections(mesh: &Mesh) -> Vec<(u32, u32)> {
             }
         }
     }
-    let lists: Vec<(&[i64; 3], &Vec<u32>)> = bins.iter().collect();
-    let mut pairs: Vec<(u32, u32)> = lists
-        .par_iter()
-        .flat_map_iter(|(cell, list)| {
+    let all: Vec<u32> = (0..n as u32).collect();
+    let mut pairs: Vec<(u32, u32)> = all
+        .par_chunks(4096)
+        .flat_map_iter(|chunk| {
             let mut found = Vec::new();
-            for (ai, &a) in list.iter().enumerate() {
-                for &b in &list[ai + 1..] {
-                    let (a, b) = (a.min(b), a.max(b));
-                    let (ba, bb) = (&boxes[a as usize], &boxes[b as usize]);
-                    if (0..3).any(|k| ba[1][k] < bb[0][k] || bb[1][k] < ba[0][k]) {
-                        continue;
-                    }
-                    // Test the pair only in the bin holding the overlap's low corner.
-                    let low = [0, 1, 2].map(|k| ba[0][k].max(bb[0][k]));
-                    if bin(low) != **cell {
-                        continue;
-                    }
-                    if triangles_intersect(mesh, &tris, a as usize, b as usize) {
-                        found.push((a, b));
+            for &a in chunk {
+                let ba = bbox(a as usize);
+                let (lo, hi) = (bin(ba[0]), bin(ba[1]));
+                for x in lo[0]..=hi[0] {
+                    for y in lo[1]..=hi[1] {
+                        for z in lo[2]..=hi[2] {
+                            let cell = [x, y, z];
+                            let Some(list) = bins.get(&cell) else { continue };
+                            for &b in list {
+                                // Each pair once: a candidate pair from its
+                                // smaller index, in the bin of the overlap's low corner.
+                                if b == a || (is_candidate(a as usize) && b < a) {
+                                    continue;
+                                }
+                                let bb = bbox(b as usize);
+                                if (0..3).any(|k| ba[1][k] < bb[0][k] || bb[1][k] < ba[0][k]) {
+                                    continue;
+                                }
+                                let low = [0, 1, 2].map(|k| ba[0][k].max(bb[0][k]));
+                                if bin(low) != cell {
+                                    continue;
+                                }
+                                let (ta, tb) = (corners(a as usize), corners(b as usize));
+                                if triangles_intersect(triangles[a as usize], triangles[b as usize], &ta, &tb) {
+                                    found.push((a.min(b), a.max(b)));
+                                }
+                            }
+                        }
                     }
                 }
             }
@@ -80,13 +111,11 @@ pub fn self_intersections(mesh: &Mesh) -> Vec<(u32, u32)> {
     pairs
 }
 
-fn triangles_intersect(mesh: &Mesh, tris: &[[[f64; 3]; 3]], a: usize, b: usize) -> bool {
-    let (ta, tb) = (mesh.triangles[a], mesh.triangles[b]);
+fn triangles_intersect(ta: [u32; 3], tb: [u32; 3], pa: &[[f64; 3]; 3], pb: &[[f64; 3]; 3]) -> bool {
     let shared: Vec<(usize, usize)> = (0..3)
         .flat_map(|i| (0..3).map(move |j| (i, j)))
         .filter(|&(i, j)| ta[i] == tb[j])
         .collect();
-    let (pa, pb) = (&tris[a], &tris[b]);
     match shared.len() {
         0 => {
             (0..3).any(|i| segment_hits(pa[i], pa[(i + 1) % 3], pb))

@@ -175,6 +175,10 @@ pub(crate) struct Contour {
     pub(crate) active_cells: usize,
     /// Patches placed at a sharp feature.
     pub(crate) feature_vertices: usize,
+    /// Vertices moved back to their mass point to undo a fold.
+    pub(crate) unfolded: usize,
+    /// Pairs of crossing triangles that remained after that.
+    pub(crate) folds_left: usize,
 }
 
 /// No match in [`lookup`].
@@ -417,19 +421,22 @@ pub(crate) fn contour(
         features: usize,
     }
     let indexed: Vec<usize> = (0..cells.len()).collect();
-    let placed: Vec<(Vec<CellOut>, Vec<[f64; 3]>)> = indexed
+    // Per chunk: its cells, and per vertex its position, mass point and risk.
+    type Placed = (Vec<CellOut>, Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<bool>);
+    let placed: Vec<Placed> = indexed
         .par_chunks(CHUNK)
         .map_init(
             || BatchEvaluator::<f64>::new(field.tape()),
             |batch, chunk| {
                 let mut out = Vec::new();
                 if ctl.cancelled() {
-                    return (out, Vec::new());
+                    return (out, Vec::new(), Vec::new(), Vec::new());
                 }
                 // Start points (QEF fit or mass point), their cells and directions.
                 let mut starts: Vec<[f64; 3]> = Vec::new();
                 let mut lows: Vec<[f64; 3]> = Vec::new();
                 let mut dirs: Vec<Option<[f64; 3]>> = Vec::new();
+                let mut masses: Vec<[f64; 3]> = Vec::new();
                 for &ci in chunk {
                     let (patch, n) = cell_patches(&cell_values[ci]);
                     if n == 0 {
@@ -475,6 +482,7 @@ pub(crate) fn contour(
                         starts.push(x);
                         lows.push(lo);
                         dirs.push(dir);
+                        masses.push(q.mass_point());
                     }
                     out.push(CellOut {
                         key: cells[ci],
@@ -483,7 +491,19 @@ pub(crate) fn contour(
                         features,
                     });
                 }
-                (out, place(field, batch, &starts, &dirs, &lows, grid.h))
+                let placed = place(field, batch, &starts, &dirs, &lows, grid.h);
+                // Sharp vertices and vertices held at their cell's side are
+                // where a fold can happen; they keep their mass point as a fallback.
+                let risky: Vec<bool> = placed
+                    .iter()
+                    .zip(&dirs)
+                    .zip(&lows)
+                    .map(|((p, d), lo)| {
+                        d.is_none()
+                            || (0..3).any(|k| (p[k] - lo[k]).min(lo[k] + grid.h - p[k]) <= 2.0 * CELL_MARGIN * grid.h)
+                    })
+                    .collect();
+                (out, placed, masses, risky)
             },
         )
         .collect();
@@ -492,7 +512,11 @@ pub(crate) fn contour(
     let mut positions = Vec::new();
     let mut feature_vertices = 0;
     let mut cell_out = Vec::new();
-    for (cs, ps) in placed {
+    let mut masses = Vec::new();
+    let mut risky = Vec::new();
+    for (cs, ps, ms, rs) in placed {
+        masses.extend(ms);
+        risky.extend(rs);
         let mut k = positions.len() as u32;
         for c in &cs {
             first.push(k);
@@ -537,13 +561,67 @@ pub(crate) fn contour(
         }
     });
     ctl.progress(Stage::Faces, 1.0);
+    let (unfolded, folds_left) = unfold(&mut positions, &triangles, &masses, &mut risky);
     Ok(Contour {
         positions,
         triangles,
+        unfolded,
+        folds_left,
         missed_cells,
         active_cells,
         feature_vertices,
     })
+}
+
+/// Rounds of fold repair.
+const UNFOLD_ROUNDS: usize = 4;
+
+/// Undoes folds: where triangles around risky vertices (sharp, or held at
+/// their cell's side) cross other triangles, those vertices go back to their
+/// patch's mass point, which lies inside the cell on the marching-cubes
+/// polygon; repeated (checking again around every vertex involved) a few
+/// rounds. Returns the vertices moved and the crossing pairs left.
+fn unfold(
+    positions: &mut [[f64; 3]],
+    triangles: &[[u32; 3]],
+    masses: &[[f64; 3]],
+    risky: &mut [bool],
+) -> (usize, usize) {
+    let mut watch = risky.to_vec();
+    let mut moved = 0;
+    let mut left = 0;
+    for round in 0..=UNFOLD_ROUNDS {
+        let candidate: Vec<bool> = triangles.iter().map(|t| t.iter().any(|&v| watch[v as usize])).collect();
+        if !candidate.contains(&true) {
+            left = 0;
+            break;
+        }
+        let pairs = crate::check::crossing_pairs(positions, triangles, Some(&candidate));
+        left = pairs.len();
+        if pairs.is_empty() || round == UNFOLD_ROUNDS {
+            break;
+        }
+        watch.fill(false);
+        let mut any = false;
+        for (a, b) in pairs {
+            for t in [a, b] {
+                for &v in &triangles[t as usize] {
+                    let v = v as usize;
+                    watch[v] = true;
+                    if risky[v] {
+                        positions[v] = masses[v];
+                        risky[v] = false;
+                        moved += 1;
+                        any = true;
+                    }
+                }
+            }
+        }
+        if !any {
+            break;
+        }
+    }
+    (moved, left)
 }
 
 /// An edge key (lower corner << 2 | axis) as corner and axis.

@@ -59,6 +59,11 @@ pub struct MeshStats {
     pub missed_cells: usize,
     /// Vertices placed at sharp features.
     pub feature_vertices: usize,
+    /// Vertices moved back to their patch's mass point because triangles
+    /// around them crossed others (a fold at a sharp or clamped vertex).
+    pub unfolded_vertices: usize,
+    /// Pairs of crossing triangles around such vertices that remain.
+    pub folds_left: usize,
     /// The largest distance from a vertex to the surface, estimated as
     /// |f| / |∇f| at the vertex (exact for a true distance field).
     pub max_error: f64,
@@ -213,6 +218,8 @@ pub fn mesh_shape_with(tape: &Tape, settings: &MeshSettings, ctl: &Control) -> R
         active_cells: c.active_cells,
         missed_cells: c.missed_cells,
         feature_vertices: c.feature_vertices,
+        unfolded_vertices: c.unfolded,
+        folds_left: c.folds_left,
         max_error,
         rms_error,
         timings,

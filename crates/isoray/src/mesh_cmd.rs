@@ -225,6 +225,17 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
             s.active_cells,
             s.feature_vertices
         );
+        if s.unfolded_vertices > 0 {
+            println!(
+                "  {} vertices at folds moved back to their patch's mass point{}",
+                s.unfolded_vertices,
+                if s.folds_left > 0 {
+                    format!("; {} crossing triangle pairs remain", s.folds_left)
+                } else {
+                    String::new()
+                }
+            );
+        }
         if s.missed_cells > 0 {
             eprintln!(
                 "warning: {label}: the distance bound skipped {} cells that the surface crosses (added back); the field overestimates the distance\n  = help: pass --lipschitz 2 (or more)",
