@@ -14,22 +14,16 @@ use std::collections::HashMap;
 /// The pairs of triangles (by index, smaller first) that intersect, sorted.
 pub fn self_intersections(mesh: &Mesh) -> Vec<(u32, u32)> {
     let positions: Vec<[f64; 3]> = mesh.positions.iter().map(|p| p.map(f64::from)).collect();
-    crossing_pairs(&positions, &mesh.triangles, None)
+    crossing_pairs(&positions, &mesh.triangles)
 }
 
-/// The crossing pairs of triangles; with `candidate`, only pairs in which at
-/// least one triangle is a candidate (the bins hold candidates only, and
-/// every triangle is tested against the candidates whose bins it overlaps).
-pub(crate) fn crossing_pairs(
-    positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    candidate: Option<&[bool]>,
-) -> Vec<(u32, u32)> {
+/// The crossing pairs of triangles, each pair tested once, in the bin that
+/// holds the low corner of the overlap of their boxes.
+fn crossing_pairs(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
     let n = triangles.len();
     if n < 2 {
         return Vec::new();
     }
-    let is_candidate = |i: usize| candidate.is_none_or(|c| c[i]);
     let corners = |i: usize| triangles[i].map(|v| positions[v as usize]);
     let bbox = |i: usize| {
         let t = corners(i);
@@ -46,17 +40,11 @@ pub(crate) fn crossing_pairs(
         let b = bbox(i);
         (0..3).map(|k| b[1][k] - b[0][k]).fold(0.0, f64::max)
     };
-    // Bin size: twice the mean box extent (of the candidates, when given).
-    let (sum, count) = (0..n)
-        .filter(|&i| is_candidate(i))
-        .fold((0.0, 0usize), |(s, c), i| (s + extent(i), c + 1));
-    if count == 0 {
-        return Vec::new();
-    }
-    let size = (2.0 * sum / count as f64).max(1e-12);
+    // Bin size: twice the mean box extent.
+    let size = (2.0 * (0..n).map(extent).sum::<f64>() / n as f64).max(1e-12);
     let bin = |p: [f64; 3]| p.map(|v| (v / size).floor() as i64);
     let mut bins: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-    for i in (0..n).filter(|&i| is_candidate(i)) {
+    for i in 0..n {
         let b = bbox(i);
         let (lo, hi) = (bin(b[0]), bin(b[1]));
         for x in lo[0]..=hi[0] {
@@ -81,9 +69,8 @@ pub(crate) fn crossing_pairs(
                             let cell = [x, y, z];
                             let Some(list) = bins.get(&cell) else { continue };
                             for &b in list {
-                                // Each pair once: a candidate pair from its
-                                // smaller index, in the bin of the overlap's low corner.
-                                if b == a || (is_candidate(a as usize) && b < a) {
+                                // Each pair once: from its smaller index.
+                                if b <= a {
                                     continue;
                                 }
                                 let bb = bbox(b as usize);
@@ -100,6 +87,108 @@ pub(crate) fn crossing_pairs(
                                 }
                             }
                         }
+                    }
+                }
+            }
+            found.into_iter()
+        })
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    pairs
+}
+
+/// Vertex → incident triangles, in compressed rows.
+pub(crate) struct VertexTriangles {
+    start: Vec<u32>,
+    list: Vec<u32>,
+}
+
+impl VertexTriangles {
+    /// The incidence of `triangles` over `vertices` vertices.
+    pub(crate) fn new(vertices: usize, triangles: &[[u32; 3]]) -> Self {
+        let mut start = vec![0u32; vertices + 1];
+        for t in triangles {
+            for &v in t {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for i in 0..vertices {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut list = vec![0u32; start[vertices] as usize];
+        for (i, t) in triangles.iter().enumerate() {
+            for &v in t {
+                list[fill[v as usize] as usize] = i as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        VertexTriangles { start, list }
+    }
+
+    /// The triangles around vertex `v`.
+    pub(crate) fn of(&self, v: u32) -> &[u32] {
+        &self.list[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
+
+/// The crossing pairs in which one triangle touches a `watch`ed vertex and
+/// the other lies within two rings of triangles around it: the local test
+/// of fold repair (folds of dual contouring stay within a few cells).
+pub(crate) fn crossing_pairs_near(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    around: &VertexTriangles,
+    watch: &[u32],
+) -> Vec<(u32, u32)> {
+    let corners = |i: u32| triangles[i as usize].map(|v| positions[v as usize]);
+    let bbox = |t: &[[f64; 3]; 3]| {
+        let mut b = [t[0], t[0]];
+        for p in &t[1..] {
+            for k in 0..3 {
+                b[0][k] = b[0][k].min(p[k]);
+                b[1][k] = b[1][k].max(p[k]);
+            }
+        }
+        b
+    };
+    let mut pairs: Vec<(u32, u32)> = watch
+        .par_iter()
+        .flat_map_iter(|&v| {
+            let near: Vec<u32> = around.of(v).to_vec();
+            // Two rings of triangles around v.
+            let mut ring: Vec<u32> = Vec::new();
+            let mut frontier = near.clone();
+            for _ in 0..2 {
+                let mut next = Vec::new();
+                for &t in &frontier {
+                    for &w in &triangles[t as usize] {
+                        next.extend_from_slice(around.of(w));
+                    }
+                }
+                next.sort_unstable();
+                next.dedup();
+                frontier = next.clone();
+                ring.extend(next);
+            }
+            ring.sort_unstable();
+            ring.dedup();
+            let mut found = Vec::new();
+            for &a in &near {
+                let ta = corners(a);
+                let ba = bbox(&ta);
+                for &b in &ring {
+                    if b == a {
+                        continue;
+                    }
+                    let tb = corners(b);
+                    let bb = bbox(&tb);
+                    if (0..3).any(|k| ba[1][k] < bb[0][k] || bb[1][k] < ba[0][k]) {
+                        continue;
+                    }
+                    if triangles_intersect(triangles[a as usize], triangles[b as usize], &ta, &tb) {
+                        found.push((a.min(b), a.max(b)));
                     }
                 }
             }

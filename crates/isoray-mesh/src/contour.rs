@@ -587,27 +587,27 @@ fn unfold(
     masses: &[[f64; 3]],
     risky: &mut [bool],
 ) -> (usize, usize) {
-    let mut watch = risky.to_vec();
+    let around = crate::check::VertexTriangles::new(positions.len(), triangles);
+    let mut watch: Vec<u32> = (0..risky.len() as u32).filter(|&v| risky[v as usize]).collect();
     let mut moved = 0;
     let mut left = 0;
     for round in 0..=UNFOLD_ROUNDS {
-        let candidate: Vec<bool> = triangles.iter().map(|t| t.iter().any(|&v| watch[v as usize])).collect();
-        if !candidate.contains(&true) {
+        if watch.is_empty() {
             left = 0;
             break;
         }
-        let pairs = crate::check::crossing_pairs(positions, triangles, Some(&candidate));
+        let pairs = crate::check::crossing_pairs_near(positions, triangles, &around, &watch);
         left = pairs.len();
         if pairs.is_empty() || round == UNFOLD_ROUNDS {
             break;
         }
-        watch.fill(false);
+        let mut next = Vec::new();
         let mut any = false;
         for (a, b) in pairs {
             for t in [a, b] {
                 for &v in &triangles[t as usize] {
+                    next.push(v);
                     let v = v as usize;
-                    watch[v] = true;
                     if risky[v] {
                         positions[v] = masses[v];
                         risky[v] = false;
@@ -620,6 +620,9 @@ fn unfold(
         if !any {
             break;
         }
+        next.sort_unstable();
+        next.dedup();
+        watch = next;
     }
     (moved, left)
 }
