@@ -98,6 +98,9 @@ fn crossing_pairs(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<(u32, u
     pairs
 }
 
+/// Rings of triangles around a watched vertex that fold repair tests.
+const RINGS: usize = 1;
+
 /// Vertex → incident triangles, in compressed rows.
 pub(crate) struct VertexTriangles {
     start: Vec<u32>,
@@ -160,7 +163,7 @@ pub(crate) fn crossing_pairs_near(
             // Two rings of triangles around v.
             let mut ring: Vec<u32> = Vec::new();
             let mut frontier = near.clone();
-            for _ in 0..2 {
+            for _ in 0..RINGS {
                 let mut next = Vec::new();
                 for &t in &frontier {
                     for &w in &triangles[t as usize] {

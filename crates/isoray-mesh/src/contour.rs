@@ -106,6 +106,9 @@ fn face(a: usize, s: u32) -> ([usize; 4], [usize; 4]) {
 /// number of patches.
 pub(crate) fn cell_patches(v: &[f64; 8]) -> ([u8; 12], u8) {
     let inside = |c: usize| v[c] < 0.0;
+    if v.iter().all(|&x| x < 0.0) || v.iter().all(|&x| x >= 0.0) {
+        return ([255; 12], 0);
+    }
     let mut links = [[255u8; 2]; 12];
     let mut link = |e0: usize, e1: usize| {
         for (e, o) in [(e0, e1), (e1, e0)] {
@@ -116,8 +119,15 @@ pub(crate) fn cell_patches(v: &[f64; 8]) -> ([u8; 12], u8) {
     for a in 0..3 {
         for s in 0..2 {
             let (c, e) = face(a, s);
-            let crossed: Vec<usize> = (0..4).filter(|&i| inside(c[i]) != inside(c[(i + 1) % 4])).collect();
-            match crossed.len() {
+            let mut crossed = [0usize; 4];
+            let mut count = 0;
+            for i in 0..4 {
+                if inside(c[i]) != inside(c[(i + 1) % 4]) {
+                    crossed[count] = i;
+                    count += 1;
+                }
+            }
+            match count {
                 2 => link(e[crossed[0]], e[crossed[1]]),
                 4 => {
                     // Corners 0 and 2 share a sign. The bilinear saddle value
@@ -446,7 +456,8 @@ pub(crate) fn contour(
                     let mut features = 0;
                     for p in 0..n {
                         let mut q = Qef::default();
-                        let mut normals: Vec<[f64; 3]> = Vec::with_capacity(6);
+                        let mut normals = [[0.0; 3]; 12];
+                        let mut nn = 0;
                         for e in 0..12 {
                             let i = cell_edges[ci][e];
                             if patch[e] != p || i == NONE {
@@ -458,8 +469,10 @@ pub(crate) fn contour(
                                 continue;
                             }
                             q.add(pt, nm);
-                            normals.push(nm);
+                            normals[nn] = nm;
+                            nn += 1;
                         }
+                        let normals = &normals[..nn];
                         let sharp = normals
                             .iter()
                             .enumerate()
@@ -473,7 +486,7 @@ pub(crate) fn contour(
                             (q.solve(QEF_TRUNCATION), None)
                         } else {
                             let mut m = [0.0; 3];
-                            for v in &normals {
+                            for v in normals {
                                 m = [m[0] + v[0], m[1] + v[1], m[2] + v[2]];
                             }
                             let m = normalize(m);
@@ -492,15 +505,14 @@ pub(crate) fn contour(
                     });
                 }
                 let placed = place(field, batch, &starts, &dirs, &lows, grid.h);
-                // Sharp vertices and vertices held at their cell's side are
-                // where a fold can happen; they keep their mass point as a fallback.
+                // Vertices held at their cell's side (their fit or projection
+                // wanted to leave the cell) are where folds happen; they keep
+                // their mass point as a fallback.
                 let risky: Vec<bool> = placed
                     .iter()
-                    .zip(&dirs)
                     .zip(&lows)
-                    .map(|((p, d), lo)| {
-                        d.is_none()
-                            || (0..3).any(|k| (p[k] - lo[k]).min(lo[k] + grid.h - p[k]) <= 2.0 * CELL_MARGIN * grid.h)
+                    .map(|(p, lo)| {
+                        (0..3).any(|k| (p[k] - lo[k]).min(lo[k] + grid.h - p[k]) <= 2.0 * CELL_MARGIN * grid.h)
                     })
                     .collect();
                 (out, placed, masses, risky)
