@@ -137,7 +137,7 @@ impl VertexTriangles {
 }
 
 /// The crossing pairs in which one triangle touches a `watch`ed vertex and
-/// the other lies within two rings of triangles around it: the local test
+/// the other lies within [`RINGS`] ring(s) of triangles around it: the local test
 /// of fold repair (folds of dual contouring stay within a few cells).
 pub(crate) fn crossing_pairs_near(
     positions: &[[f64; 3]],

@@ -588,8 +588,8 @@ pub(crate) fn contour(
 /// Rounds of fold repair.
 const UNFOLD_ROUNDS: usize = 4;
 
-/// Undoes folds: where triangles around risky vertices (sharp, or held at
-/// their cell's side) cross other triangles, those vertices go back to their
+/// Undoes folds: where triangles around risky vertices (held at their
+/// cell's side) cross other triangles, those vertices go back to their
 /// patch's mass point, which lies inside the cell on the marching-cubes
 /// polygon; repeated (checking again around every vertex involved) a few
 /// rounds. Returns the vertices moved and the crossing pairs left.

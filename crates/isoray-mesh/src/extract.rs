@@ -60,7 +60,7 @@ pub struct MeshStats {
     /// Vertices placed at sharp features.
     pub feature_vertices: usize,
     /// Vertices moved back to their patch's mass point because triangles
-    /// around them crossed others (a fold at a sharp or clamped vertex).
+    /// around them crossed others (a fold at a vertex held at its cell's side).
     pub unfolded_vertices: usize,
     /// Pairs of crossing triangles around such vertices that remain.
     pub folds_left: usize,
