@@ -382,22 +382,25 @@ pub(crate) fn contour(
             f_upper[i] = f;
         }
     }
-    let edge_ends: Vec<([f64; 3], f64, [f64; 3], f64)> = (0..edges.len())
-        .map(|i| {
-            let (c, a) = edge_unkey(edges[i]);
-            let mut c1 = c;
-            c1[a] += 1;
-            (grid.point(c), f_lower[i], grid.point(c1), f_upper[i])
-        })
-        .collect();
-    let crossings: Vec<([f64; 3], [f64; 3])> = edge_ends
+    let order: Vec<usize> = (0..edges.len()).collect();
+    let crossings: Vec<([f64; 3], [f64; 3])> = order
         .par_chunks(CHUNK)
         .map_init(
             || BatchEvaluator::<f64>::new(field.tape()),
-            |batch, ends| {
+            |batch, chunk| {
                 if ctl.cancelled() {
                     return Vec::new();
                 }
+                let ends: Vec<([f64; 3], f64, [f64; 3], f64)> = chunk
+                    .iter()
+                    .map(|&i| {
+                        let (c, a) = edge_unkey(edges[i]);
+                        let mut c1 = c;
+                        c1[a] += 1;
+                        (grid.point(c), f_lower[i], grid.point(c1), f_upper[i])
+                    })
+                    .collect();
+                let ends = &ends[..];
                 let points = crossings(field, batch, ends);
                 let mut grads = Vec::new();
                 field.gradients_with(batch, &points, GRADIENT_STEP * grid.h, &mut grads);
@@ -538,6 +541,8 @@ pub(crate) fn contour(
         positions.extend(ps);
         cell_out.extend(cs);
     }
+    // What the faces do not need any more.
+    drop((cell_values, cell_edges, crossings, keys, values, cells));
     let cell_keys: Vec<u64> = cell_out.iter().map(|c| c.key).collect();
 
     // One quad per crossed edge: its four cells' patches, found per axis and
@@ -555,7 +560,6 @@ pub(crate) fn contour(
             }
         }
     }
-    let order: Vec<usize> = (0..edges.len()).collect();
     let triangles: Vec<[u32; 3]> = par_gather(&order, |chunk, out| {
         for &i in chunk {
             let mut q = quads[i];
