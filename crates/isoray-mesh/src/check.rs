@@ -25,17 +25,7 @@ fn crossing_pairs(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<(u32, u
         return Vec::new();
     }
     let corners = |i: usize| triangles[i].map(|v| positions[v as usize]);
-    let bbox = |i: usize| {
-        let t = corners(i);
-        let mut b = [t[0], t[0]];
-        for p in &t[1..] {
-            for k in 0..3 {
-                b[0][k] = b[0][k].min(p[k]);
-                b[1][k] = b[1][k].max(p[k]);
-            }
-        }
-        b
-    };
+    let bbox = |i: usize| bounding_box(&corners(i));
     let extent = |i: usize| {
         let b = bbox(i);
         (0..3).map(|k| b[1][k] - b[0][k]).fold(0.0, f64::max)
@@ -146,16 +136,7 @@ pub(crate) fn crossing_pairs_near(
     watch: &[u32],
 ) -> Vec<(u32, u32)> {
     let corners = |i: u32| triangles[i as usize].map(|v| positions[v as usize]);
-    let bbox = |t: &[[f64; 3]; 3]| {
-        let mut b = [t[0], t[0]];
-        for p in &t[1..] {
-            for k in 0..3 {
-                b[0][k] = b[0][k].min(p[k]);
-                b[1][k] = b[1][k].max(p[k]);
-            }
-        }
-        b
-    };
+    let bbox = bounding_box;
     let mut pairs: Vec<(u32, u32)> = watch
         .par_iter()
         .flat_map_iter(|&v| {
@@ -201,6 +182,18 @@ pub(crate) fn crossing_pairs_near(
     pairs.sort_unstable();
     pairs.dedup();
     pairs
+}
+
+/// A triangle's axis-aligned bounding box, [min, max].
+fn bounding_box(t: &[[f64; 3]; 3]) -> [[f64; 3]; 2] {
+    let mut b = [t[0], t[0]];
+    for p in &t[1..] {
+        for k in 0..3 {
+            b[0][k] = b[0][k].min(p[k]);
+            b[1][k] = b[1][k].max(p[k]);
+        }
+    }
+    b
 }
 
 fn triangles_intersect(ta: [u32; 3], tb: [u32; 3], pa: &[[f64; 3]; 3], pb: &[[f64; 3]; 3]) -> bool {
