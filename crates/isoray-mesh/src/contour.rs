@@ -105,6 +105,35 @@ fn face(a: usize, s: u32) -> ([usize; 4], [usize; 4]) {
 /// faces). Returns, per edge, its patch (255 when not crossed), and the
 /// number of patches.
 pub(crate) fn cell_patches(v: &[f64; 8]) -> ([u8; 12], u8) {
+    cell_patches_with(v, 0)
+}
+
+/// The two segments (as pairs of positions 0..4 in the face's cyclic edge
+/// order) of face (a, s) when it is ambiguous (four crossed edges), with
+/// the asymptotic decider's choice, inverted when `flipped`.
+fn face_segments(v: &[f64; 8], a: usize, s: u32, flipped: bool) -> Option<[(usize, usize); 2]> {
+    let (c, _) = face(a, s);
+    let inside = |k: usize| v[c[k]] < 0.0;
+    if (0..4).any(|i| inside(i) == inside((i + 1) % 4)) {
+        return None;
+    }
+    // Corners 0 and 2 share a sign. The bilinear saddle value decides
+    // whether they connect through the face.
+    let (f0, f1, f2, f3) = (v[c[0]], v[c[1]], v[c[2]], v[c[3]]);
+    let saddle = (f0 * f2 - f1 * f3) / (f0 + f2 - f1 - f3);
+    let connected_02 = ((saddle < 0.0) == inside(0)) != flipped;
+    Some(if connected_02 {
+        // Cut off corners 1 and 3.
+        [(0, 1), (2, 3)]
+    } else {
+        // Cut off corners 0 and 2.
+        [(3, 0), (1, 2)]
+    })
+}
+
+/// [`cell_patches`] with the ambiguous faces whose bit (a·2 + s) is set in
+/// `flip` resolved the other way.
+fn cell_patches_with(v: &[f64; 8], flip: u8) -> ([u8; 12], u8) {
     let inside = |c: usize| v[c] < 0.0;
     if v.iter().all(|&x| x < 0.0) || v.iter().all(|&x| x >= 0.0) {
         return ([255; 12], 0);
@@ -130,19 +159,10 @@ pub(crate) fn cell_patches(v: &[f64; 8]) -> ([u8; 12], u8) {
             match count {
                 2 => link(e[crossed[0]], e[crossed[1]]),
                 4 => {
-                    // Corners 0 and 2 share a sign. The bilinear saddle value
-                    // decides whether they connect through the face.
-                    let (f0, f1, f2, f3) = (v[c[0]], v[c[1]], v[c[2]], v[c[3]]);
-                    let saddle = (f0 * f2 - f1 * f3) / (f0 + f2 - f1 - f3);
-                    let connected_02 = (saddle < 0.0) == inside(c[0]);
-                    if connected_02 {
-                        // Cut off corners 1 and 3.
-                        link(e[0], e[1]);
-                        link(e[2], e[3]);
-                    } else {
-                        // Cut off corners 0 and 2.
-                        link(e[3], e[0]);
-                        link(e[1], e[2]);
+                    if let Some(segs) = face_segments(v, a, s, flip >> (a * 2 + s as usize) & 1 == 1) {
+                        for (i, j) in segs {
+                            link(e[i], e[j]);
+                        }
                     }
                 }
                 _ => {}
@@ -269,6 +289,82 @@ fn par_gather<T: Sync, U: Send>(items: &[T], f: impl Fn(&[T], &mut Vec<U>) + Syn
         })
         .collect();
     parts.into_iter().flatten().collect()
+}
+
+/// Rounds of ambiguous-face flipping.
+const FACE_ROUNDS: usize = 4;
+
+/// Each cell's patches, with ambiguous faces re-resolved where two
+/// face-adjacent cells would otherwise join the same two patches by both
+/// segments of their shared face: that pair of vertices would be an edge of
+/// four quads (a non-manifold edge, where a sheet thinner than a cell
+/// passes between them). Flipping the face's choice in both cells splits
+/// the link; it is repeated around the cells that changed.
+fn resolve_faces(cells: &[u64], values: &[[f64; 8]]) -> Vec<([u8; 12], u8)> {
+    let n = cells.len();
+    let mut patches: Vec<([u8; 12], u8)> = values.par_iter().map(cell_patches).collect();
+    let mut flip = vec![0u8; n];
+    // Upper neighbour of each cell along each axis.
+    let upper: Vec<Vec<u32>> = (0..3)
+        .map(|a| {
+            let unit = key(std::array::from_fn(|k| (k == a) as u32));
+            let q: Vec<u64> = cells.iter().map(|&k| k + unit).collect();
+            lookup(cells, &q)
+        })
+        .collect();
+    let conflict = |patches: &[([u8; 12], u8)], flip: &[u8], lo: usize, hi: usize, a: usize| -> bool {
+        let Some(segs) = face_segments(&values[lo], a, 1, flip[lo] >> (a * 2 + 1) & 1 == 1) else {
+            return false;
+        };
+        let (_, el) = face(a, 1);
+        let (_, eh) = face(a, 0);
+        let (pl, ph) = (&patches[lo].0, &patches[hi].0);
+        pl[el[segs[0].0]] == pl[el[segs[1].0]] && ph[eh[segs[0].0]] == ph[eh[segs[1].0]]
+    };
+    let mut todo: Vec<usize> = (0..n).filter(|&i| patches[i].1 > 0).collect();
+    for _ in 0..FACE_ROUNDS {
+        let found: Vec<(usize, usize, usize)> = todo
+            .par_iter()
+            .flat_map_iter(|&lo| {
+                let mut out = Vec::new();
+                for (a, up) in upper.iter().enumerate() {
+                    let hi = up[lo];
+                    if hi != NONE && conflict(&patches, &flip, lo, hi as usize, a) {
+                        out.push((lo, hi as usize, a));
+                    }
+                }
+                out.into_iter()
+            })
+            .collect();
+        if found.is_empty() {
+            break;
+        }
+        let mut changed = Vec::new();
+        for &(lo, hi, a) in &found {
+            flip[lo] ^= 1 << (a * 2 + 1);
+            flip[hi] ^= 1 << (a * 2);
+            changed.extend([lo, hi]);
+        }
+        changed.sort_unstable();
+        changed.dedup();
+        for &c in &changed {
+            patches[c] = cell_patches_with(&values[c], flip[c]);
+        }
+        // Check again the faces of the changed cells: their upper faces,
+        // and their lower ones from the cell below.
+        let mut next = changed.clone();
+        for up in &upper {
+            for (lo, &hi) in up.iter().enumerate() {
+                if hi != NONE && changed.binary_search(&(hi as usize)).is_ok() {
+                    next.push(lo);
+                }
+            }
+        }
+        next.sort_unstable();
+        next.dedup();
+        todo = next;
+    }
+    patches
 }
 
 /// Runs dual contouring over the `cells` (sorted keys) of `grid`.
@@ -426,6 +522,7 @@ pub(crate) fn contour(
             ce[e] = i;
         }
     }
+    let patches = resolve_faces(&cells, &cell_values);
     let cos_feature = feature_angle_deg.to_radians().cos();
     struct CellOut {
         key: u64,
@@ -451,7 +548,7 @@ pub(crate) fn contour(
                 let mut dirs: Vec<Option<[f64; 3]>> = Vec::new();
                 let mut masses: Vec<[f64; 3]> = Vec::new();
                 for &ci in chunk {
-                    let (patch, n) = cell_patches(&cell_values[ci]);
+                    let (patch, n) = patches[ci];
                     if n == 0 {
                         continue;
                     }

@@ -232,3 +232,20 @@ fn bad_settings_are_errors_not_panics() {
         isoray_mesh::MeshError::Unbounded
     );
 }
+
+#[test]
+fn shells_thinner_than_a_cell_stay_manifold() {
+    // Both sides of the shell pass through the same cells: ambiguous faces
+    // whose two segments would join the same two patches are flipped.
+    for (text, res) in [
+        ("abs(sphere(p, 1.0)) - 0.02", 24),
+        ("abs(sphere(p, 1.0)) - 0.02", 32),
+        ("abs(sphere(p, 1.0)) - 0.02", 48),
+        ("abs(abs(sphere(p, 1.0)) - 0.1) - 0.02", 48),
+    ] {
+        let (m, _) = mesh_text(text, res);
+        let t = m.topology();
+        assert!(t.is_closed_manifold(), "{text} at {res}: {t:?}");
+        assert!(self_intersections(&m).is_empty(), "{text} at {res}");
+    }
+}
