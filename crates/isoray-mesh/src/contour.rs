@@ -400,6 +400,10 @@ pub(crate) fn contour(
         };
         let pts: Vec<[f64; 3]> = new.iter().map(|&k| grid.point(unkey(k))).collect();
         let mut vals = field.values(&pts);
+        if let Some(i) = vals.iter().position(|v| v.is_nan()) {
+            let n = vals.iter().filter(|v| v.is_nan()).count();
+            return Err(MeshError::NotANumber { count: n, at: pts[i] });
+        }
         for (v, &k) in vals.iter_mut().zip(&new) {
             if grid.on_boundary(unkey(k)) {
                 *v = v.max(0.0);
@@ -479,7 +483,7 @@ pub(crate) fn contour(
         }
     }
     let order: Vec<usize> = (0..edges.len()).collect();
-    let crossings: Vec<([f64; 3], [f64; 3])> = order
+    let crossings: Vec<([f64; 3], [f64; 3], f64)> = order
         .par_chunks(CHUNK)
         .map_init(
             || BatchEvaluator::<f64>::new(field.tape()),
@@ -503,7 +507,7 @@ pub(crate) fn contour(
                 points
                     .into_iter()
                     .zip(grads)
-                    .map(|(p, (_, g))| (p, normalize(g)))
+                    .map(|(p, (_, g))| (p, normalize(g), norm(g)))
                     .collect::<Vec<_>>()
             },
         )
@@ -545,7 +549,7 @@ pub(crate) fn contour(
                 // Start points (QEF fit or mass point), their cells and directions.
                 let mut starts: Vec<[f64; 3]> = Vec::new();
                 let mut lows: Vec<[f64; 3]> = Vec::new();
-                let mut dirs: Vec<Option<[f64; 3]>> = Vec::new();
+                let mut dirs: Vec<Option<([f64; 3], f64)>> = Vec::new();
                 let mut masses: Vec<[f64; 3]> = Vec::new();
                 for &ci in chunk {
                     let (patch, n) = patches[ci];
@@ -558,18 +562,20 @@ pub(crate) fn contour(
                         let mut q = Qef::default();
                         let mut normals = [[0.0; 3]; 12];
                         let mut nn = 0;
+                        let mut slope = 0.0;
                         for e in 0..12 {
                             let i = cell_edges[ci][e];
                             if patch[e] != p || i == NONE {
                                 continue;
                             }
-                            let (pt, nm) = crossings[i as usize];
+                            let (pt, nm, gm) = crossings[i as usize];
                             if nm == [0.0; 3] {
                                 q.add_point(pt);
                                 continue;
                             }
                             q.add(pt, nm);
                             normals[nn] = nm;
+                            slope += gm;
                             nn += 1;
                         }
                         let normals = &normals[..nn];
@@ -590,7 +596,8 @@ pub(crate) fn contour(
                                 m = [m[0] + v[0], m[1] + v[1], m[2] + v[2]];
                             }
                             let m = normalize(m);
-                            (q.mass_point(), (m != [0.0; 3]).then_some(m))
+                            // The field's mean slope across the patch seeds the search.
+                            (q.mass_point(), (m != [0.0; 3]).then_some((m, slope / nn.max(1) as f64)))
                         };
                         starts.push(x);
                         lows.push(lo);
@@ -882,7 +889,7 @@ fn place<'t>(
     field: &Field<'t>,
     ev: &mut BatchEvaluator<'t, f64>,
     starts: &[[f64; 3]],
-    dirs: &[Option<[f64; 3]>],
+    dirs: &[Option<([f64; 3], f64)>],
     lows: &[[f64; 3]],
     h: f64,
 ) -> Vec<[f64; 3]> {
@@ -896,16 +903,18 @@ fn place<'t>(
         i: usize,
         n: [f64; 3],
         s: f64,
+        slope: f64,
         prev: Option<(f64, f64)>,
     }
     let mut lines: Vec<Line> = Vec::new();
     let mut newton: Vec<usize> = Vec::new();
     for (i, d) in dirs.iter().enumerate() {
         match d {
-            Some(n) => lines.push(Line {
+            Some((n, slope)) => lines.push(Line {
                 i,
                 n: *n,
                 s: 0.0,
+                slope: if *slope > 1e-9 { *slope } else { 1.0 },
                 prev: None,
             }),
             None => newton.push(i),
@@ -926,10 +935,10 @@ fn place<'t>(
             if !f.is_finite() || f.abs() <= tiny {
                 continue;
             }
-            // Secant on the previous sample, or a unit-slope step (a distance field).
+            // Secant on the previous sample, or the slope seen at the crossings.
             let slope = match l.prev {
                 Some((s0, f0)) if (f - f0).abs() > 0.0 && l.s != s0 => (f - f0) / (l.s - s0),
-                _ => 1.0,
+                _ => l.slope,
             };
             if slope.abs() <= 1e-6 || slope.is_nan() {
                 continue;
@@ -948,6 +957,8 @@ fn place<'t>(
             );
             let moved = dot(sub(next, out[l.i]), sub(next, out[l.i]));
             out[l.i] = next;
+            // Where the cell held the point, the search goes on from where it is.
+            l.s = dot(sub(next, st), l.n);
             if moved > 1e-20 * h * h {
                 still.push(l);
             }

@@ -46,7 +46,7 @@ impl Default for MeshSettings {
 /// What meshing measured.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MeshStats {
-    /// The box that was meshed (the grid's box).
+    /// The box that was meshed (given, or found and padded).
     pub bounds: [[f64; 3]; 2],
     /// Cell side.
     pub cell_size: f64,
@@ -128,12 +128,14 @@ pub fn mesh_shape_with(tape: &Tape, settings: &MeshSettings, ctl: &Control) -> R
             mark(Stage::Bounds, &mut lap);
             // Pad by two cells of the final grid (after padding).
             let longest = (0..3).map(|k| b[1][k] - b[0][k]).fold(0.0, f64::max);
-            let pad = 2.0 * longest / (resolution.max(5) as f64 - 4.0);
+            let pad = 2.0 * longest / (resolution.max(8) as f64 - 4.0);
             [b[0].map(|v| v - pad), b[1].map(|v| v + pad)]
         }
     };
     let grid = Grid::new(bounds, resolution)?;
-    let field = Field::new(tape, grid.box_bounds(), settings.offset);
+    // The field is clipped to the box asked for (the lattice may reach a
+    // little beyond it, to whole cells).
+    let field = Field::new(tape, bounds, settings.offset);
     let cells = active_cells(&field, &grid, settings.lipschitz, ctl)?;
     mark(Stage::Octree, &mut lap);
     let c = contour(&field, &grid, cells, settings.feature_angle_deg, ctl)?;
@@ -160,7 +162,9 @@ pub fn mesh_shape_with(tape: &Tape, settings: &MeshSettings, ctl: &Control) -> R
                     .into_iter()
                     .map(|(f, g)| {
                         let gn = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
-                        let err = if gn > 0.0 { f.abs() / gn } else { f.abs() };
+                        // Where differences see no slope (the tip of a
+                        // corner), |f| itself: a distance's error.
+                        let err = if gn > 1e-3 { f.abs() / gn } else { f.abs() };
                         (normalize(g), err)
                     })
                     .collect::<Vec<_>>()
@@ -212,7 +216,7 @@ pub fn mesh_shape_with(tape: &Tape, settings: &MeshSettings, ctl: &Control) -> R
         triangle_materials: Vec::new(),
     };
     let stats = MeshStats {
-        bounds: grid.box_bounds(),
+        bounds,
         cell_size: grid.h,
         cells: grid.cells,
         active_cells: c.active_cells,

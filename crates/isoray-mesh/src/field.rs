@@ -84,7 +84,10 @@ impl<'t> Field<'t> {
         }
         ev.eval(&xyz[0], &xyz[1], &xyz[2], out);
         for (v, p) in out.iter_mut().zip(points) {
-            *v = (*v - self.iso).max(self.box_distance(*p).0);
+            // NaN stays NaN (f64::max would drop it) so that it is reported.
+            if !v.is_nan() {
+                *v = (*v - self.iso).max(self.box_distance(*p).0);
+            }
         }
     }
 

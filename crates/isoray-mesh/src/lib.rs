@@ -43,15 +43,24 @@ pub enum MeshError {
     #[error("{0}")]
     Settings(String),
     /// The shape has no surface within the search cube (or the given box).
-    #[error("the shape has no surface in the box (or, without one, within ±{SEARCH_RADIUS} of the origin)")]
+    #[error("the shape has no surface in the box (or, without one, within ±{SEARCH_RADIUS} of the origin), or its field overestimates the distance")]
     NoSurface,
     /// The surface reaches the search cube: give bounds.
     #[error("the shape is unbounded (its surface reaches ±{SEARCH_RADIUS}): give bounds to mesh a part of it")]
     Unbounded,
-    /// The field comes near zero but never turns negative: an unsigned
-    /// field (a sheet such as |f|) encloses no solid.
-    #[error("the field comes close to zero but is never negative: an unsigned field (a sheet such as abs(f)) encloses no solid; mesh a thin shell around it with an offset")]
+    /// The field comes near zero but never turns negative at the lattice
+    /// points: a shape thinner than a cell, or an unsigned field (a sheet
+    /// such as |f|), which encloses no solid.
+    #[error("the field comes close to zero but is never negative at the lattice points: the shape is thinner than a cell (raise the resolution), or the field is unsigned (a sheet such as abs(f) encloses no solid: mesh a thin shell around it with an offset)")]
     NoSignChange,
+    /// The field is not a number at some lattice points.
+    #[error("the field is not a number (NaN) at {count} sample points, e.g. at ({:.4}, {:.4}, {:.4}): check for sqrt or log of negative numbers and 0/0", at[0], at[1], at[2])]
+    NotANumber {
+        /// How many samples were NaN.
+        count: usize,
+        /// One of them.
+        at: [f64; 3],
+    },
     /// Cancelled through [`Control`]'s flag.
     #[error("cancelled")]
     Cancelled,

@@ -130,15 +130,8 @@ impl Mesh {
     /// Checks the mesh's topology: edges, winding, vertex fans, degenerate triangles.
     ///
     /// A triangle counts as degenerate when two of its indices are equal or
-    /// its area is below `1e-12` times the square of the bounds' diagonal.
+    /// its area is below `1e-12` times the square of its longest edge.
     pub fn topology(&self) -> Topology {
-        let diag2 = self
-            .bounds()
-            .map(|b| {
-                let d = sub(b[1], b[0]);
-                dot(d, d)
-            })
-            .unwrap_or(0.0);
         let mut topo = Topology::default();
         // Undirected edges as (smaller << 32 | larger), with the direction
         // in which each triangle runs along it; sorted, equal keys are one edge.
@@ -150,7 +143,10 @@ impl Mesh {
             }
             let [a, b, c] = self.corners(i);
             let area = 0.5 * norm(cross(sub(b, a), sub(c, a)));
-            if area <= 1e-12 * diag2 {
+            let longest2 = dot(sub(b, a), sub(b, a))
+                .max(dot(sub(c, b), sub(c, b)))
+                .max(dot(sub(a, c), sub(a, c)));
+            if area <= 1e-12 * longest2 {
                 topo.degenerate_triangles += 1;
             }
             for k in 0..3 {

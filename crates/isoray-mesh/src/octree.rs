@@ -77,11 +77,6 @@ impl Grid {
         [0, 1, 2].map(|k| self.origin[k] + c[k] as f64 * self.h)
     }
 
-    /// The box the lattice covers: [origin, origin + cells·h].
-    pub(crate) fn box_bounds(&self) -> [[f64; 3]; 2] {
-        [self.origin, self.point(self.cells)]
-    }
-
     /// True when a lattice point lies on or beyond the box's boundary.
     #[inline]
     pub(crate) fn on_boundary(&self, c: [u32; 3]) -> bool {
@@ -126,10 +121,17 @@ pub(crate) fn active_cells(field: &Field, grid: &Grid, lipschitz: f64, ctl: &Con
             })
             .collect();
         let values = field.values(&centres);
+        if !values.is_empty() && values.iter().all(|v| v.is_nan()) {
+            return Err(MeshError::NotANumber {
+                count: values.len(),
+                at: centres[0],
+            });
+        }
         let kept = level
             .iter()
             .zip(&values)
-            .filter(|(_, v)| v.abs() <= radius)
+            // NaN cannot rule a cell out (it is reported once the corners are sampled).
+            .filter(|(_, v)| v.is_nan() || v.abs() <= radius)
             .map(|(c, _)| *c);
         if size == 1 {
             let mut keys: Vec<u64> = kept.map(key).collect();

@@ -249,3 +249,52 @@ fn shells_thinner_than_a_cell_stay_manifold() {
         assert!(self_intersections(&m).is_empty(), "{text} at {res}");
     }
 }
+
+#[test]
+fn nan_fields_are_reported() {
+    let shape = compile(&Library::new(), "sqrt(-1.0) + sphere(p, 1.0)").unwrap();
+    let boxed = MeshSettings {
+        bounds: Some([[-1.0; 3], [1.0; 3]]),
+        resolution: 16,
+        ..MeshSettings::default()
+    };
+    for s in [boxed, MeshSettings::default()] {
+        assert!(matches!(
+            mesh_shape(shape.tape(), &s),
+            Err(isoray_mesh::MeshError::NotANumber { .. })
+        ));
+    }
+}
+
+#[test]
+fn steep_fields_put_vertices_on_the_surface() {
+    // 100 × a sphere's distance: the slope seen at the crossings seeds the search.
+    let shape = compile(&Library::new(), "100.0 * sphere(p, 1.0)").unwrap();
+    let settings = MeshSettings {
+        resolution: 32,
+        lipschitz: 100.0,
+        ..MeshSettings::default()
+    };
+    let (m, _) = mesh_shape(shape.tape(), &settings).unwrap();
+    for p in &m.positions {
+        let r = (p[0] as f64).hypot(p[1] as f64).hypot(p[2] as f64);
+        assert!((r - 1.0).abs() < 1e-5, "radius {r}");
+    }
+}
+
+#[test]
+fn the_box_given_is_the_box_meshed() {
+    // A sphere cut to |z| ≤ 0.3 by the box, at a resolution whose cells do
+    // not fit the box's height.
+    let shape = compile(&Library::new(), "sphere(p, 1.0)").unwrap();
+    let settings = MeshSettings {
+        resolution: 8,
+        bounds: Some([[-2.0, -2.0, -0.3], [2.0, 2.0, 0.3]]),
+        ..MeshSettings::default()
+    };
+    let (m, _) = mesh_shape(shape.tape(), &settings).unwrap();
+    assert!(m.topology().is_closed_manifold());
+    let b = m.bounds().unwrap();
+    assert!(b[0][2] >= -0.3 - 1e-6 && b[1][2] <= 0.3 + 1e-6, "{b:?}");
+    assert!(b[1][2] > 0.29, "{b:?}");
+}

@@ -188,9 +188,15 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
                 eprintln!("warning: skipping {}: {e}\n{help}", t.label);
                 continue;
             }
-            Err(e @ (MeshError::Unbounded | MeshError::NoSurface)) => {
+            Err(e @ MeshError::Unbounded) => {
                 return Err(usage(format!(
                     "{}: {e}\n  = help: give --bounds xmin,ymin,zmin,xmax,ymax,zmax",
+                    t.label
+                )))
+            }
+            Err(e @ MeshError::NoSurface) => {
+                return Err(usage(format!(
+                    "{}: {e}\n  = help: give --bounds around the shape, or --lipschitz L if its field grows faster than the distance",
                     t.label
                 )))
             }
@@ -201,7 +207,7 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
     }
     if summaries.is_empty() {
         return Err(usage(
-            "nothing to mesh: every object is unbounded\n  = help: give --bounds, or name an object".into(),
+            "nothing to mesh: every object was skipped (see the warnings above)\n  = help: give --bounds, --offset, or name an object".into(),
         ));
     }
     let mesh_secs = start.elapsed().as_secs_f64();
