@@ -30,8 +30,12 @@ fn crossing_pairs(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<(u32, u
         let b = bbox(i);
         (0..3).map(|k| b[1][k] - b[0][k]).fold(0.0, f64::max)
     };
-    // Bin size: twice the mean box extent.
-    let size = (2.0 * (0..n).map(extent).sum::<f64>() / n as f64).max(1e-12);
+    // Bin size: twice the mean box extent, but no triangle in more than
+    // about 17³ bins (a few huge triangles among small ones).
+    let extents: Vec<f64> = (0..n).map(extent).collect();
+    let mean = extents.iter().sum::<f64>() / n as f64;
+    let largest = extents.iter().copied().fold(0.0, f64::max);
+    let size = (2.0 * mean).max(largest / 16.0).max(1e-12);
     let bin = |p: [f64; 3]| p.map(|v| (v / size).floor() as i64);
     let mut bins: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
     for i in 0..n {

@@ -84,8 +84,9 @@ impl Grid {
     }
 }
 
-/// The most cells one octree level may keep (about 1 GiB of work space).
-pub(crate) const MAX_CELLS: usize = 64 << 20;
+/// The most cells one octree level may keep: about 150 bytes of work space
+/// per kept finest cell, so about 2.5 GiB at the limit.
+pub(crate) const MAX_CELLS: usize = 16 << 20;
 
 /// The finest cells (as sorted keys of their lowest corner) that the
 /// surface of `field` may cross, by breadth-first descent from the root.
