@@ -1,0 +1,1 @@
+//! A-buffer: fragments with 4×8 coverage masks (work in progress).

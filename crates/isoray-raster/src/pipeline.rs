@@ -1,0 +1,1 @@
+//! Transforms, clipping, scan conversion and the Z-buffer (work in progress).
