@@ -20,16 +20,13 @@ pub struct RayCamera {
 impl RayCamera {
     /// Sets up the camera for a `width`×`height` image.
     pub fn new(c: &Camera, width: u32, height: u32) -> Self {
-        let origin = DVec3::from(c.position);
-        let forward = (DVec3::from(c.target) - origin).normalize();
-        let right = forward.cross(DVec3::from(c.up)).normalize();
-        let up = right.cross(forward);
+        let [forward, right, up] = c.basis().map(DVec3::from);
         RayCamera {
-            origin,
+            origin: DVec3::from(c.position),
             forward,
             right,
             up,
-            tan_half: (c.fov.to_radians() * 0.5).tan(),
+            tan_half: c.tan_half_fov(),
             aspect: width as f64 / height as f64,
             width: width as f64,
             height: height as f64,

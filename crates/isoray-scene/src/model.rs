@@ -27,6 +27,39 @@ pub struct Camera {
     pub projection: Projection,
 }
 
+impl Camera {
+    /// The camera's orthonormal frame, the one convention the ray tracer and
+    /// the polygon pipeline share: (forward, right, up) with
+    /// forward = normalize(target − position), right = normalize(forward × up)
+    /// and up = right × forward.
+    pub fn basis(&self) -> [Vec3; 3] {
+        let norm = |v: Vec3| {
+            let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            [v[0] / l, v[1] / l, v[2] / l]
+        };
+        let cross = |a: Vec3, b: Vec3| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let forward = norm([
+            self.target[0] - self.position[0],
+            self.target[1] - self.position[1],
+            self.target[2] - self.position[2],
+        ]);
+        let right = norm(cross(forward, self.up));
+        let up = cross(right, forward);
+        [forward, right, up]
+    }
+
+    /// tan(fov / 2).
+    pub fn tan_half_fov(&self) -> f64 {
+        (self.fov.to_radians() * 0.5).tan()
+    }
+}
+
 /// How a camera maps directions to pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Projection {
