@@ -6,8 +6,13 @@
 //! perspective-correct interpolation, and hidden-surface removal by a
 //! Z-buffer or an A-buffer with 4×8 subpixel coverage masks.
 //!
-//! Work in progress (issue 7): shading, shadow buffers, environment-mapped
-//! reflections and `isoray raster` come next.
+//! [`render::raster`] meshes a scene ([`scene`]) and renders it with flat,
+//! Gouraud or Phong shading ([`shading`]) behind either buffer; it backs
+//! `isoray raster`. Work in progress (issue 7): shadow buffers and
+//! environment-mapped reflections come next.
 
 pub mod abuffer;
 pub mod pipeline;
+pub mod render;
+pub mod scene;
+pub mod shading;

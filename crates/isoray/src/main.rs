@@ -2,6 +2,7 @@
 
 mod algebra_cmd;
 mod mesh_cmd;
+mod raster_cmd;
 
 use std::io::{BufRead, BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -124,6 +125,51 @@ enum Command {
         /// Override any scene key.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+    },
+    /// Render a scene with the classic polygon pipeline: objects meshed,
+    /// scan-converted and shaded (no shadows or reflections yet).
+    Raster {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Output PNG.
+        #[arg(short, long, value_name = "OUT.png")]
+        output: PathBuf,
+        /// Hidden-surface removal.
+        #[arg(long, value_enum, default_value_t = raster_cmd::Hidden::Zbuffer)]
+        hidden: raster_cmd::Hidden,
+        /// Polygon shading.
+        #[arg(long, value_enum, default_value_t = raster_cmd::ShadingArg::Phong)]
+        shading: raster_cmd::ShadingArg,
+        /// Shadows (only `none` is implemented yet).
+        #[arg(long, value_enum, default_value_t = raster_cmd::Shadows::None)]
+        shadows: raster_cmd::Shadows,
+        /// Reflections (only `none` is implemented yet).
+        #[arg(long, value_enum, default_value_t = raster_cmd::Reflections::None)]
+        reflections: raster_cmd::Reflections,
+        /// Shadow / environment map size in texels (not used yet).
+        #[arg(long, value_name = "N")]
+        map_size: Option<u32>,
+        /// Compare with the ray tracer and write a JSON report (not implemented yet).
+        #[arg(long, value_name = "REPORT.json")]
+        error_vs_raytrace: Option<PathBuf>,
+        /// Mesh resolution: cells along each object's longest side (default 96).
+        #[arg(long, value_name = "N")]
+        resolution: Option<u32>,
+        /// Image width (overrides render.width).
+        #[arg(long, value_name = "W")]
+        width: Option<u32>,
+        /// Image height (overrides render.height).
+        #[arg(long, value_name = "H")]
+        height: Option<u32>,
+        /// Override any scene key.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Worker threads (default: all cores).
+        #[arg(long, value_name = "N")]
+        threads: Option<usize>,
+        /// No summary.
+        #[arg(short, long)]
+        quiet: bool,
     },
     /// Mesh a scene's objects, one object, or one surface into a triangle mesh
     /// file (.stl, .obj, .ply or .glb by the output's extension). Shapes are
@@ -256,6 +302,40 @@ fn main() -> ExitCode {
             timeout,
         } => algebra_cmd::cmd_implicitize(&x, &y, z.as_deref(), params.as_deref(), &method, stats, timeout),
         Command::Check { scene, set } => cmd_check(&scene, &set),
+        Command::Raster {
+            scene,
+            output,
+            hidden,
+            shading,
+            shadows,
+            reflections,
+            map_size,
+            error_vs_raytrace,
+            resolution,
+            width,
+            height,
+            set,
+            threads,
+            quiet,
+        } => {
+            let mut overrides = set;
+            overrides.extend(width.map(|w| format!("render.width={w}")));
+            overrides.extend(height.map(|h| format!("render.height={h}")));
+            raster_cmd::cmd_raster(&raster_cmd::RasterArgs {
+                scene: &scene,
+                output: &output,
+                hidden,
+                shading,
+                shadows,
+                reflections,
+                map_size,
+                error_vs_raytrace: error_vs_raytrace.as_deref(),
+                resolution,
+                overrides: &overrides,
+                threads,
+                quiet,
+            })
+        }
         Command::Mesh {
             scene,
             name,

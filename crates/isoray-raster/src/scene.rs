@@ -1,0 +1,125 @@
+//! Scene objects → world-space triangle meshes with their materials.
+//!
+//! Each object is meshed by [`isoray_mesh::mesh_shape`] at a given
+//! resolution. Unbounded objects (planes, half-spaces) are meshed within a
+//! cube centred on the camera's target with half-size 3 × the distance from
+//! the camera to its target, which covers the visible part of a ground plane
+//! in ordinary framings (the slab's far edge may show on wide views). Sheets
+//! (unsigned fields with no sign change) and empty shapes are skipped with a
+//! warning.
+
+use isoray_mesh::{mesh_shape, Mesh, MeshError, MeshSettings};
+use isoray_scene::Scene;
+
+/// One object's mesh, with unit vertex normals (always filled).
+#[derive(Debug, Clone)]
+pub struct ObjectMesh {
+    /// Index into `scene.objects`.
+    pub object: usize,
+    /// Index into `scene.materials`.
+    pub material: usize,
+    /// The triangles, in world space.
+    pub mesh: Mesh,
+}
+
+/// The meshed scene and what could not be meshed.
+#[derive(Debug, Clone, Default)]
+pub struct MeshedScene {
+    /// Meshes, in object order.
+    pub objects: Vec<ObjectMesh>,
+    /// Human-readable warnings (skipped objects).
+    pub warnings: Vec<String>,
+}
+
+/// Why an object could not be meshed.
+#[derive(Debug, thiserror::Error)]
+#[error("object {label}: {source}")]
+pub struct SceneMeshError {
+    /// The object's name or index.
+    pub label: String,
+    /// The mesher's error.
+    #[source]
+    pub source: MeshError,
+}
+
+/// Half-size factor of the cube (around the camera target) an unbounded object is meshed in.
+pub const UNBOUNDED_EXTENT: f64 = 3.0;
+
+/// The box unbounded objects are meshed in: a cube centred on the camera
+/// target with half-size [`UNBOUNDED_EXTENT`] × distance(camera, target).
+pub fn unbounded_box(scene: &Scene) -> [[f64; 3]; 2] {
+    let (p, t) = (scene.camera.position, scene.camera.target);
+    let d = ((p[0] - t[0]).powi(2) + (p[1] - t[1]).powi(2) + (p[2] - t[2]).powi(2)).sqrt();
+    let h = (UNBOUNDED_EXTENT * d).max(1e-3).min(scene.render.max_distance);
+    [[t[0] - h, t[1] - h, t[2] - h], [t[0] + h, t[1] + h, t[2] + h]]
+}
+
+/// Meshes every object of `scene` at `resolution` cells along the longest side.
+pub fn mesh_scene(scene: &Scene, resolution: u32) -> Result<MeshedScene, SceneMeshError> {
+    let lipschitz = (1.0 / scene.render.step_scale.clamp(1e-6, 1.0)).max(1.0);
+    let mut out = MeshedScene::default();
+    for (i, obj) in scene.objects.iter().enumerate() {
+        let label = obj.name.clone().unwrap_or_else(|| format!("#{i}"));
+        let mut settings = MeshSettings {
+            resolution,
+            lipschitz,
+            ..MeshSettings::default()
+        };
+        let mut result = mesh_shape(obj.shape.tape(), &settings);
+        if matches!(result, Err(MeshError::Unbounded)) {
+            settings.bounds = Some(unbounded_box(scene));
+            result = mesh_shape(obj.shape.tape(), &settings);
+        }
+        match result {
+            Ok((mut mesh, _)) => {
+                ensure_normals(&mut mesh);
+                out.objects.push(ObjectMesh {
+                    object: i,
+                    material: obj.material,
+                    mesh,
+                });
+            }
+            Err(e @ (MeshError::NoSignChange | MeshError::Unbounded)) => {
+                out.warnings.push(format!("object {label} skipped: {e}"));
+            }
+            Err(source) => return Err(SceneMeshError { label, source }),
+        }
+    }
+    Ok(out)
+}
+
+/// Fills `mesh.normals` with area-weighted face normals when it has none.
+pub fn ensure_normals(mesh: &mut Mesh) {
+    if mesh.normals.len() == mesh.positions.len() {
+        return;
+    }
+    let mut acc = vec![[0.0f64; 3]; mesh.positions.len()];
+    for t in 0..mesh.triangles.len() {
+        let [a, b, c] = mesh.corners(t);
+        let n = cross(sub(b, a), sub(c, a));
+        for &v in &mesh.triangles[t] {
+            for k in 0..3 {
+                acc[v as usize][k] += n[k];
+            }
+        }
+    }
+    mesh.normals = acc
+        .iter()
+        .map(|n| {
+            let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt().max(1e-300);
+            [(n[0] / l) as f32, (n[1] / l) as f32, (n[2] / l) as f32]
+        })
+        .collect();
+}
+
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
