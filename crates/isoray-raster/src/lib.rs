@@ -12,7 +12,12 @@
 //! environment-mapped reflections come next.
 
 pub mod abuffer;
+pub mod compare;
+pub mod draw;
+pub mod envmap;
 pub mod pipeline;
 pub mod render;
 pub mod scene;
 pub mod shading;
+pub mod shadow;
+pub mod triangles;

@@ -131,6 +131,27 @@ impl ViewTransform {
         Some([sx, sy, w])
     }
 
+    /// The world point at screen position (`x`, `y`) (pixels, as
+    /// [`ViewTransform::ndc_to_screen`]) and depth `w` in front of the eye:
+    /// the inverse of [`ViewTransform::to_screen`].
+    pub fn screen_to_world(&self, x: f64, y: f64, w: f64) -> [f64; 3] {
+        let nx = (x + 0.5) / self.width * 2.0 - 1.0;
+        let ny = 1.0 - (y + 0.5) / self.height * 2.0;
+        let cx = nx * self.tan_half * self.aspect * w;
+        let cy = ny * self.tan_half * w;
+        std::array::from_fn(|k| self.eye[k] + cx * self.right[k] + cy * self.up[k] + w * self.forward[k])
+    }
+
+    /// The unit viewing axis (forward) in world space.
+    pub fn forward(&self) -> [f64; 3] {
+        self.forward
+    }
+
+    /// The eye position in world space.
+    pub fn eye(&self) -> [f64; 3] {
+        self.eye
+    }
+
     /// Screen position of a world point: `[x, y, depth]` as
     /// [`ViewTransform::camera_to_screen`]. `None` behind the eye.
     pub fn to_screen(&self, p_world: [f64; 3]) -> Option<[f64; 3]> {
@@ -291,18 +312,30 @@ pub fn rasterize<const N: usize>(
     tri: &[ScreenVertex<N>; 3],
     width: usize,
     height: usize,
+    emit: impl FnMut(&Fragment<N>),
+) {
+    rasterize_rows(tri, width, 0..height, emit)
+}
+
+/// [`rasterize`] restricted to the pixel rows `rows` (a band of the image,
+/// for rasterising bands in parallel): the fragments are exactly those of
+/// [`rasterize`] whose row is in `rows`.
+pub fn rasterize_rows<const N: usize>(
+    tri: &[ScreenVertex<N>; 3],
+    width: usize,
+    rows: std::ops::Range<usize>,
     mut emit: impl FnMut(&Fragment<N>),
 ) {
     let p = [tri[0].xy(), tri[1].xy(), tri[2].xy()];
     let area2 = 2.0 * signed_area(p[0], p[1], p[2]);
-    if area2 == 0.0 || !area2.is_finite() || width == 0 || height == 0 {
+    if area2 == 0.0 || !area2.is_finite() || width == 0 || rows.is_empty() {
         return;
     }
     let mut s = p;
     s.sort_by(|a, b| a[1].total_cmp(&b[1]).then(a[0].total_cmp(&b[0])));
     let [v0, v1, v2] = s;
-    let y_start = v0[1].ceil().max(0.0);
-    let y_end = v2[1].ceil().min(height as f64);
+    let y_start = v0[1].ceil().max(rows.start as f64);
+    let y_end = v2[1].ceil().min(rows.end as f64);
     let mut y = y_start;
     while y < y_end {
         let x_long = edge_x(v0, v2, y);

@@ -1,10 +1,12 @@
 //! Local illumination for the polygon pipeline, with the ray tracer's
 //! formulas ([`isoray_render::shade`]): emission + ambient + Σ over lights of
-//! colour × intensity × attenuation × (diffuse + specular), without shadows
-//! or ambient occlusion. Area lights are lit from their centre point.
+//! colour × intensity × attenuation × visibility × (diffuse + specular),
+//! without ambient occlusion. Area lights are lit from their centre point.
+//! Visibility (shadows) comes from the caller: shadow buffers or the
+//! A-buffered environment map.
 
 use glam::Vec3;
-use isoray_render::shade::{direct, Surface};
+use isoray_render::shade::{direct_parts, Surface};
 use isoray_scene::{LightKind, Scene};
 
 /// How polygons are shaded.
@@ -55,29 +57,65 @@ impl<'s> Lighting<'s> {
 
     /// Linear RGB leaving world point `p` with unit normal `n`, of material `m`, towards the eye.
     pub fn shade(&self, m: usize, p: Vec3, n: Vec3) -> Vec3 {
-        let s = self.surface(m, p);
         let v = (self.eye - p).normalize_or_zero();
-        let mut c = s.emission + s.ambient;
-        for light in &self.scene.lights {
-            let (l, dist) = match light.kind {
-                LightKind::Directional { direction } => (v3(direction).normalize_or_zero(), f32::INFINITY),
-                LightKind::Point { position }
-                | LightKind::Sphere { position, .. }
-                | LightKind::Rect { position, .. } => {
-                    let d = v3(position) - p;
-                    (d.normalize_or_zero(), d.length())
-                }
-            };
-            let a = light.attenuation;
-            let att = if dist.is_finite() {
-                1.0 / (a[0] as f32 + a[1] as f32 * dist + a[2] as f32 * dist * dist).max(1e-12)
-            } else {
-                1.0
-            };
+        self.shade_lit(self.surface(m, p), p, n, v, Vec3::ONE, |_, _, _| 1.0)
+    }
+
+    /// The direction toward light `i` from `p` (unit), the distance to it
+    /// (infinite for directional lights) and its attenuation there.
+    pub fn light_at(&self, i: usize, p: Vec3) -> (Vec3, f32, f32) {
+        let light = &self.scene.lights[i];
+        let (l, dist) = match light.kind {
+            LightKind::Directional { direction } => (v3(direction).normalize_or_zero(), f32::INFINITY),
+            LightKind::Point { position } | LightKind::Sphere { position, .. } | LightKind::Rect { position, .. } => {
+                let d = v3(position) - p;
+                (d.normalize_or_zero(), d.length())
+            }
+        };
+        let a = light.attenuation;
+        let att = if dist.is_finite() {
+            1.0 / (a[0] as f32 + a[1] as f32 * dist + a[2] as f32 * dist * dist).max(1e-12)
+        } else {
+            1.0
+        };
+        (l, dist, att)
+    }
+
+    /// The ray tracer's local shading of surface `s` at `p` (unit normal
+    /// `n`, unit direction `v` toward the viewer): emission + local·ambient +
+    /// Σ lights radiance·attenuation·visibility·(local·diffuse + specular),
+    /// where `local` is the Fresnel split's local weight (1 for opaque,
+    /// non-reflective surfaces) and `visibility(light, l, distance)` the
+    /// light's visibility (shadows; 1 without).
+    pub fn shade_lit(
+        &self,
+        s: &Surface,
+        p: Vec3,
+        n: Vec3,
+        v: Vec3,
+        local: Vec3,
+        visibility: impl Fn(usize, Vec3, f32) -> f32,
+    ) -> Vec3 {
+        let mut c = s.emission + local * s.ambient;
+        for (i, light) in self.scene.lights.iter().enumerate() {
+            let (l, dist, att) = self.light_at(i, p);
+            if n.dot(l) <= 0.0 {
+                continue;
+            }
+            let vis = visibility(i, l, dist);
+            if vis <= 0.0 {
+                continue;
+            }
             let radiance = v3(light.color) * light.intensity as f32;
-            c += radiance * att * direct(s, n, v, l);
+            let (diffuse, specular) = direct_parts(s, n, v, l);
+            c += radiance * att * vis * (local * diffuse + specular);
         }
         c
+    }
+
+    /// The eye (camera position).
+    pub fn eye(&self) -> Vec3 {
+        self.eye
     }
 
     /// Opacity of material `m`: 1 − transparency.

@@ -66,6 +66,11 @@ fn atomically(
     })
 }
 
+/// Writes `text` to `path` atomically: a failed write leaves an existing file intact.
+pub fn write_text(path: &Path, text: &str) -> std::result::Result<(), OutputError> {
+    atomically(path, |tmp| std::fs::write(tmp, text).map_err(|e| e.to_string()))
+}
+
 /// Writes linear RGB as an 8-bit sRGB PNG.
 pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> std::result::Result<(), OutputError> {
     let bytes = to_srgb8(rgb);

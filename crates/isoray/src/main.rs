@@ -127,7 +127,8 @@ enum Command {
         set: Vec<String>,
     },
     /// Render a scene with the classic polygon pipeline: objects meshed,
-    /// scan-converted and shaded (no shadows or reflections yet).
+    /// scan-converted behind a Z-buffer or an A-buffer and shaded, with
+    /// shadow buffers and environment-mapped reflections and refractions.
     Raster {
         /// The scene file (TOML).
         scene: PathBuf,
@@ -140,16 +141,18 @@ enum Command {
         /// Polygon shading.
         #[arg(long, value_enum, default_value_t = raster_cmd::ShadingArg::Phong)]
         shading: raster_cmd::ShadingArg,
-        /// Shadows (only `none` is implemented yet).
+        /// Shadows.
         #[arg(long, value_enum, default_value_t = raster_cmd::Shadows::None)]
         shadows: raster_cmd::Shadows,
-        /// Reflections (only `none` is implemented yet).
+        /// Reflections and refractions.
         #[arg(long, value_enum, default_value_t = raster_cmd::Reflections::None)]
         reflections: raster_cmd::Reflections,
-        /// Shadow / environment map size in texels (not used yet).
+        /// Texels along a side of each shadow-buffer and environment-map face (default 512).
         #[arg(long, value_name = "N")]
         map_size: Option<u32>,
-        /// Compare with the ray tracer and write a JSON report (not implemented yet).
+        /// Compare with the ray tracer: write a JSON report (angular error of
+        /// reflections, wrong reflective pixels, PSNR) and the ray-traced
+        /// image beside it (REPORT.raytrace.png).
         #[arg(long, value_name = "REPORT.json")]
         error_vs_raytrace: Option<PathBuf>,
         /// Mesh resolution: cells along each object's longest side (default 96).

@@ -1,12 +1,14 @@
-//! `isoray raster`: a scene rendered by the classic polygon pipeline
-//! (issue 7). Shadows, reflections and the comparison with the ray tracer
-//! are accepted on the command line but not implemented yet.
+//! `isoray raster`: a scene rendered by the classic polygon pipeline, with
+//! shadow buffers or environment-map shadows, environment-mapped
+//! reflections and refractions, and a measured comparison with the ray
+//! tracer (`--error-vs-raytrace`).
 
 use std::path::Path;
 use std::time::Instant;
 
 use clap::ValueEnum;
-use isoray_raster::render::{raster, HiddenSurface, RasterOptions};
+use isoray_raster::compare::{error_vs_raytrace, ErrorReport};
+use isoray_raster::render::{raster, HiddenSurface, RasterOptions, ReflectionMethod, ShadowMethod};
 use isoray_raster::shading::Shading;
 use isoray_render::output;
 use isoray_scene::load;
@@ -38,9 +40,9 @@ pub(crate) enum ShadingArg {
 pub(crate) enum Shadows {
     /// No shadows.
     None,
-    /// Shadow buffers (not implemented yet).
+    /// A shadow buffer per light, with bias and percentage-closer filtering.
     Buffer,
-    /// Shadows from environment maps (not implemented yet).
+    /// A walk from the light through the camera-centred A-buffered cube map.
     Envmap,
 }
 
@@ -49,11 +51,11 @@ pub(crate) enum Shadows {
 pub(crate) enum Reflections {
     /// No reflections.
     None,
-    /// Blinn–Newell environment mapping (not implemented yet).
+    /// Blinn–Newell: a cube map per reflective object, looked up by direction.
     BlinnNewell,
-    /// Cube maps rendered with the Z-buffer (not implemented yet).
+    /// A camera-centred Z-buffered cube map, searched along the reflected ray.
     ZbufferMap,
-    /// Cube maps rendered with the A-buffer (not implemented yet).
+    /// A camera-centred A-buffered cube map (back faces kept), searched through every layer.
     AbufferMap,
 }
 
@@ -73,36 +75,24 @@ pub(crate) struct RasterArgs<'a> {
     pub quiet: bool,
 }
 
-fn not_yet(what: String) -> Failure {
-    usage(format!("{what} is not implemented yet in `isoray raster` (issue 7)"))
-}
-
 pub(crate) fn cmd_raster(a: &RasterArgs) -> Result<(), Failure> {
     let ext = a.output.extension().map(|e| e.to_string_lossy().to_lowercase());
     if ext.as_deref() != Some("png") {
         return Err(usage(format!("output `{}` must end in .png", a.output.display())));
     }
-    if a.shadows != Shadows::None {
-        let v = a
-            .shadows
-            .to_possible_value()
-            .map(|v| v.get_name().to_owned())
-            .unwrap_or_default();
-        return Err(not_yet(format!("--shadows {v}")));
+    if let Some(r) = a.error_vs_raytrace {
+        let ext = r.extension().map(|e| e.to_string_lossy().to_lowercase());
+        if ext.as_deref() != Some("json") {
+            return Err(usage(format!(
+                "--error-vs-raytrace `{}` must end in .json",
+                r.display()
+            )));
+        }
     }
-    if a.reflections != Reflections::None {
-        let v = a
-            .reflections
-            .to_possible_value()
-            .map(|v| v.get_name().to_owned())
-            .unwrap_or_default();
-        return Err(not_yet(format!("--reflections {v}")));
-    }
-    if a.error_vs_raytrace.is_some() {
-        return Err(not_yet("--error-vs-raytrace".into()));
-    }
-    if a.map_size == Some(0) {
-        return Err(usage("--map-size must be at least 1".into()));
+    if let Some(m) = a.map_size {
+        if !(1..=8192).contains(&m) {
+            return Err(usage(format!("--map-size must be between 1 and 8192, found {m}")));
+        }
     }
     if a.threads == Some(0) {
         return Err(usage("--threads must be at least 1".into()));
@@ -124,6 +114,19 @@ pub(crate) fn cmd_raster(a: &RasterArgs) -> Result<(), Failure> {
             ShadingArg::Phong => Shading::Phong,
         },
         resolution: a.resolution.unwrap_or(RasterOptions::default().resolution),
+        shadows: match a.shadows {
+            Shadows::None => ShadowMethod::None,
+            Shadows::Buffer => ShadowMethod::Buffer,
+            Shadows::Envmap => ShadowMethod::EnvMap,
+        },
+        reflections: match a.reflections {
+            Reflections::None => ReflectionMethod::None,
+            Reflections::BlinnNewell => ReflectionMethod::BlinnNewell,
+            Reflections::ZbufferMap => ReflectionMethod::ZBufferMap,
+            Reflections::AbufferMap => ReflectionMethod::ABufferMap,
+        },
+        map_size: a.map_size.map_or(RasterOptions::default().map_size, |m| m as usize),
+        probes: a.error_vs_raytrace.is_some(),
         ..RasterOptions::default()
     };
     let pool = rayon::ThreadPoolBuilder::new()
@@ -140,14 +143,105 @@ pub(crate) fn cmd_raster(a: &RasterArgs) -> Result<(), Failure> {
     }
     output::write_png(a.output, image.width, image.height, &image.color).map_err(|e| io_failure(e.to_string()))?;
     if !a.quiet {
+        let t = image.timings;
         println!(
-            "rasterised {} triangles into {}×{} in {:.2}s → {}",
+            "rasterised {} triangles into {}×{} in {:.2}s (meshing {:.2}s, maps {:.2}s, drawing {:.2}s) → {}",
             image.triangles,
             image.width,
             image.height,
             start.elapsed().as_secs_f64(),
+            t.mesh,
+            t.maps,
+            t.draw,
             a.output.display()
         );
     }
+    if let Some(report_path) = a.error_vs_raytrace {
+        if !a.quiet {
+            eprintln!("ray tracing the reference image…");
+        }
+        let (report, reference) = pool.install(|| error_vs_raytrace(&scene, &image, &opts));
+        let reference_png = report_path.with_extension("raytrace.png");
+        output::write_png(&reference_png, image.width, image.height, &reference)
+            .map_err(|e| io_failure(e.to_string()))?;
+        let json = report_json(a, &report, &image, &reference_png);
+        output::write_text(report_path, &json).map_err(|e| io_failure(e.to_string()))?;
+        if !a.quiet {
+            println!(
+                "vs the ray tracer: PSNR {:.2} dB; {} reflective pixels, {:.2}% wrong, angular error mean {:.3}° max {:.3}° → {}",
+                report.psnr_db,
+                report.reflective_pixels,
+                100.0 * report.wrong_fraction,
+                report.angular_error_deg.mean,
+                report.angular_error_deg.max,
+                report_path.display()
+            );
+        }
+    }
     Ok(())
+}
+
+fn value_name<T: ValueEnum>(v: &T) -> String {
+    v.to_possible_value()
+        .map(|p| p.get_name().to_owned())
+        .unwrap_or_default()
+}
+
+fn json_number(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x}")
+    } else {
+        "null".into()
+    }
+}
+
+fn json_string(s: &str) -> String {
+    let mut out = String::from("\"");
+    for ch in s.chars() {
+        match ch {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// The `--error-vs-raytrace` report as JSON.
+fn report_json(
+    a: &RasterArgs,
+    r: &ErrorReport,
+    image: &isoray_raster::render::RasterImage,
+    reference: &Path,
+) -> String {
+    let s = &r.angular_error_deg;
+    let t = image.timings;
+    format!(
+        "{{\n  \"scene\": {},\n  \"hidden\": {},\n  \"shading\": {},\n  \"shadows\": {},\n  \"reflections\": {},\n  \"map_size\": {},\n  \"width\": {},\n  \"height\": {},\n  \"triangles\": {},\n  \"reflective_pixels\": {},\n  \"angular_error_deg\": {{ \"mean\": {}, \"rms\": {}, \"p95\": {}, \"max\": {} }},\n  \"wrong_pixels\": {},\n  \"wrong_fraction\": {},\n  \"psnr_db\": {},\n  \"seconds\": {{ \"mesh\": {}, \"maps\": {}, \"draw\": {}, \"raytrace\": {} }},\n  \"map_fragments\": {},\n  \"raytrace_image\": {}\n}}\n",
+        json_string(&a.scene.display().to_string()),
+        json_string(&value_name(&a.hidden)),
+        json_string(&value_name(&a.shading)),
+        json_string(&value_name(&a.shadows)),
+        json_string(&value_name(&a.reflections)),
+        a.map_size.unwrap_or(RasterOptions::default().map_size as u32),
+        r.width,
+        r.height,
+        image.triangles,
+        r.reflective_pixels,
+        json_number(s.mean),
+        json_number(s.rms),
+        json_number(s.p95),
+        json_number(s.max),
+        r.wrong_pixels,
+        json_number(r.wrong_fraction),
+        json_number(r.psnr_db),
+        json_number(t.mesh),
+        json_number(t.maps),
+        json_number(t.draw),
+        json_number(r.raytrace_seconds),
+        image.map_fragments,
+        json_string(&reference.display().to_string()),
+    )
 }

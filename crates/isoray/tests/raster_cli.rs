@@ -74,13 +74,14 @@ fn writes_a_png_with_a_ground_plane() {
 }
 
 #[test]
-fn unimplemented_options_are_rejected_with_code_2() {
+fn bad_options_are_rejected_with_code_2() {
     let scene = scene_file();
     let out = tmp("never.png");
-    for args in [
-        &["--reflections", "blinn-newell"][..],
-        &["--shadows", "buffer"][..],
-        &["--error-vs-raytrace", "r.json"][..],
+    for (args, expect) in [
+        (&["--map-size", "0"][..], "--map-size"),
+        (&["--error-vs-raytrace", "r.txt"][..], ".json"),
+        (&["--reflections", "mirror"][..], "mirror"),
+        (&["--shadows", "soft"][..], "soft"),
     ] {
         let o = isoray()
             .arg("raster")
@@ -92,7 +93,65 @@ fn unimplemented_options_are_rejected_with_code_2() {
             .unwrap();
         assert_eq!(o.status.code(), Some(2), "{args:?}");
         let err = String::from_utf8_lossy(&o.stderr);
-        assert!(err.contains("not implemented yet"), "{args:?}: {err}");
+        assert!(err.contains(expect), "{args:?}: {err}");
         assert!(!out.exists());
+    }
+}
+
+#[test]
+fn reflections_shadows_and_the_report() {
+    let scene = tmp("mirror.toml");
+    std::fs::write(
+        &scene,
+        SCENE
+            .replace(
+                "[material.grey]",
+                "[material.mirror]\ndiffuse = [0.1, 0.1, 0.1]\nreflectivity = 0.8\n\n[material.grey]",
+            )
+            .replace(
+                "material = \"grey\"\nshape = \"sphere",
+                "material = \"mirror\"\nshape = \"sphere",
+            ),
+    )
+    .unwrap();
+    for (reflections, shadows) in [
+        ("blinn-newell", "buffer"),
+        ("zbuffer-map", "buffer"),
+        ("abuffer-map", "envmap"),
+    ] {
+        let out = tmp(&format!("{reflections}.png"));
+        let report = tmp(&format!("{reflections}.json"));
+        let o = isoray()
+            .arg("raster")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&out)
+            .args(["--resolution", "24", "--map-size", "64", "--reflections", reflections])
+            .args(["--shadows", shadows, "--error-vs-raytrace"])
+            .arg(&report)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(image::open(&out).unwrap().to_rgb8().dimensions(), (48, 32));
+        let json = std::fs::read_to_string(&report).unwrap();
+        for key in [
+            "\"reflective_pixels\"",
+            "\"angular_error_deg\"",
+            "\"wrong_fraction\"",
+            "\"psnr_db\"",
+            "\"raytrace_image\"",
+        ] {
+            assert!(json.contains(key), "{key} missing from {json}");
+        }
+        assert!(json.contains(&format!("\"reflections\": \"{reflections}\"")), "{json}");
+        let reflective: usize = json
+            .split("\"reflective_pixels\": ")
+            .nth(1)
+            .and_then(|r| r.split(',').next())
+            .and_then(|v| v.trim().parse().ok())
+            .unwrap();
+        assert!(reflective > 50, "{json}");
+        let reference = report.with_extension("raytrace.png");
+        assert_eq!(image::open(&reference).unwrap().to_rgb8().dimensions(), (48, 32));
     }
 }
