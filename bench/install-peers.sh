@@ -3,7 +3,10 @@
 #   - with apt: POV-Ray 3.7 (Debian package `povray`), for the renderer
 #     benchmark; Singular (Debian package `singular`), for bench/singular/
 #     (algebra reference data and timings); GNU time (Debian package `time`),
-#     for the peak memory in bench/mesh.sh;
+#     for the peak memory in bench/mesh.sh; Mesa's Vulkan drivers (Debian
+#     `mesa-vulkan-drivers`: lavapipe, llvmpipe's Vulkan driver) with the
+#     Vulkan loader (`libvulkan1`) and `vulkan-tools` (vulkaninfo), for
+#     bench/raster.sh (isoray's polygon pipeline against llvmpipe via wgpu);
 #   - with pip: fogleman's sdf as packaged on PyPI (`sdflab`, pinned; it pulls
 #     in numpy and scikit-image), for bench/mesh.sh.
 # (fidget, the other mesh peer, is a crates.io dependency of
@@ -48,4 +51,26 @@ else
   python3 -m pip install --quiet "sdflab==$SDFLAB_VERSION" ||
     python3 -m pip install --quiet --break-system-packages "sdflab==$SDFLAB_VERSION"
   python3 -c 'import sdf, importlib.metadata as m; print("sdflab", m.version("sdflab"))'
+fi
+
+# Vulkan on the CPU (bench/raster.sh): lavapipe, the loader, vulkaninfo.
+VK_PKGS=(mesa-vulkan-drivers libvulkan1 vulkan-tools)
+vk_missing=()
+for p in "${VK_PKGS[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    vk_missing+=("$p")
+  fi
+done
+if [ ${#vk_missing[@]} -eq 0 ]; then
+  echo "install-peers: already installed: ${VK_PKGS[*]}"
+else
+  SUDO=()
+  if [ "$(id -u)" -ne 0 ]; then
+    SUDO=(sudo)
+  fi
+  echo "install-peers: installing: ${vk_missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  "${SUDO[@]}" apt-get update
+  "${SUDO[@]}" apt-get install -y "${vk_missing[@]}"
+  vulkaninfo --summary 2>/dev/null | grep -m1 -E 'deviceName|llvmpipe' || true
 fi

@@ -203,6 +203,56 @@ pub struct CubeMap {
     pub radius: f64,
     offsets: Vec<u32>,
     samples: Vec<MapSample>,
+    /// Depth bounds of blocks of texels, coarse to fine (empty-space skipping).
+    levels: Vec<BlockLevel>,
+}
+
+/// Texels along a side of the blocks of the search's empty-space skipping, coarse to fine.
+const BLOCKS: [usize; 2] = [16, 4];
+
+/// Per face and block of `size`×`size` texels: the depth range (min `zmin`,
+/// max `zmax`) of every sample in the block; empty blocks hold `[∞, −∞]`.
+#[derive(Debug, Clone)]
+struct BlockLevel {
+    size: usize,
+    per_side: usize,
+    bounds: Vec<[f32; 2]>,
+}
+
+impl BlockLevel {
+    fn new(size: usize, n: usize, offsets: &[u32], samples: &[MapSample]) -> Self {
+        let nb = n.div_ceil(size);
+        let mut bounds = vec![[f32::INFINITY, f32::NEG_INFINITY]; 6 * nb * nb];
+        for f in 0..6 {
+            for y in 0..n {
+                for x in 0..n {
+                    let i = (f * n + y) * n + x;
+                    let b = &mut bounds[(f * nb + y / size) * nb + x / size];
+                    for s in &samples[offsets[i] as usize..offsets[i + 1] as usize] {
+                        b[0] = b[0].min(s.zmin);
+                        b[1] = b[1].max(s.zmax);
+                    }
+                }
+            }
+        }
+        BlockLevel {
+            size,
+            per_side: nb,
+            bounds,
+        }
+    }
+
+    /// The union of the bounds of the blocks at the four corners of the box
+    /// spanned by texels `a` and `b` of one face.
+    fn around(&self, a: &Texel, b: &Texel) -> [f32; 2] {
+        let (nb, s) = (self.per_side, self.size);
+        let mut out = [f32::INFINITY, f32::NEG_INFINITY];
+        for (x, y) in [(a.x, a.y), (b.x, b.y), (a.x, b.y), (b.x, a.y)] {
+            let k = self.bounds[(a.face * nb + y / s) * nb + x / s];
+            out = [out[0].min(k[0]), out[1].max(k[1])];
+        }
+        out
+    }
 }
 
 /// Depth range (along `axis`, from `c`) of triangle `t`'s plane over the texel
@@ -330,12 +380,17 @@ impl CubeMap {
                 offsets.push(samples.len() as u32);
             }
         }
+        let levels = BLOCKS
+            .iter()
+            .map(|&b| BlockLevel::new(b, n, &offsets, &samples))
+            .collect();
         CubeMap {
             radius: tris.radius_from(centre),
             faces,
             kind,
             offsets,
             samples,
+            levels,
         }
     }
 
@@ -526,6 +581,48 @@ impl CubeMap {
                 w_hi = wp.max(wn);
                 cur = tx;
                 cur_from = (phi_now - step(u)).max(0.0);
+            }
+            // Empty-space skipping: jump a block's width along the arc when
+            // the ray's depth over that stretch misses every sample it passes
+            // (coarse blocks first). An arc shorter than a block spans at most
+            // the blocks at the four corners of its start and end texels.
+            let mut jumped = false;
+            for level in &self.levels {
+                let phi2 = (phi_now + 0.9 * 2.0 * level.size as f64 * step(u)).min(phi_end);
+                let u2 = dir_at(phi2);
+                let t2 = self.faces.texel(u2);
+                if phi2 <= phi_now || t2.face != cur.face {
+                    continue;
+                }
+                let bounds = level.around(&cur, &t2);
+                let axis = face_axis(cur.face);
+                let x2 = point(phi2);
+                let (wa, wb) = (x.dot(axis), x2.dot(axis));
+                let empty = bounds[0] > bounds[1];
+                let slack = if empty { 0.0 } else { 1e-6 * (bounds[1].abs() as f64) };
+                if !(empty || wa.max(wb) < bounds[0] as f64 - slack || wa.min(wb) > bounds[1] as f64 + slack) {
+                    continue;
+                }
+                let from = cur_from;
+                let mask_fn = |t: &Texel| arc_mask(t, (from - step(u)).max(0.0), (phi_now + step(u)).min(phi_end));
+                if let Some(hit) = check(&cur, w_lo, w_hi, &mask_fn) {
+                    return Some(hit);
+                }
+                cur = t2;
+                let w2 = x2.dot(face_axis(cur.face));
+                w_lo = w2;
+                w_hi = w2;
+                cur_from = phi2;
+                prev_point = x2;
+                phi = phi2;
+                if phi2 >= phi_end {
+                    return check(&cur, w_lo, w_hi, &|t: &Texel| arc_mask(t, phi2 - step(u2), phi2));
+                }
+                jumped = true;
+                break;
+            }
+            if jumped {
+                continue;
             }
             prev_point = x;
             phi += step(u);

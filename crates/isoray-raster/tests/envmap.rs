@@ -8,7 +8,7 @@ use glam::DVec3;
 use isoray_mesh::Mesh;
 use isoray_raster::envmap::{face_axis, face_of, CubeFaces, CubeMap, MapKind, SearchTolerance};
 use isoray_raster::pipeline::ViewTransform;
-use isoray_raster::render::{raster_meshes, HiddenSurface, RasterOptions, ReflectionMethod, ShadowMethod};
+use isoray_raster::render::{raster_meshes, RasterOptions, ReflectionMethod, ShadowMethod};
 use isoray_raster::scene::{MeshedScene, ObjectMesh};
 use isoray_raster::triangles::SceneTriangles;
 use isoray_scene::{load_str, Scene};
