@@ -20,7 +20,13 @@
 #    writes bench/out/raster/{isoray,llvmpipe,diff}.png and report.json,
 # 4. times the whole program `isoray raster` (load, mesh, raster, PNG write)
 #    REPS times at the same settings (wall time, peak RSS with GNU time),
-# 5. prints a markdown report (also saved to bench/out/raster.md).
+# 5. times the A-buffer against the Z-buffer (`isoray raster --hidden
+#    abuffer|zbuffer`, drawing time as the CLI reports it) on the same scene,
+# 6. times the environment-map methods on examples/reflections.toml at WxH
+#    (`isoray raster --reflections M --shadows buffer`: map building and
+#    drawing as the CLI reports them, and the whole program) against the ray
+#    tracer's reflections (`isoray render` of the same scene, whole program),
+# 7. prints a markdown report (also saved to bench/out/raster.md).
 #
 # Threads: llvmpipe uses LP_NUM_THREADS rasterizer threads (the harness sets it
 # to the number of cores when unset), isoray its rayon pool (all cores).
@@ -103,6 +109,55 @@ for ((r = 1; r <= REPS; r++)); do
   [ -n "$draw" ] && CLI_DRAW+=("$draw")
   CLI_RSS=$((CLI_RSS > kb ? CLI_RSS : kb))
 done
+# The CLI's "(meshing X s, maps Y s, drawing Z s)" parts of one run.
+cli_parts() { # LOG -> "maps draw"
+  sed -n 's/^rasterised .*maps \([0-9.]*\)s, drawing \([0-9.]*\)s.*/\1 \2/p' "$1" | head -n1
+}
+# median of one field of a list of "a b" pairs: field N
+field_median() { local n=$1; shift; median $(printf '%s\n' "$@" | awk -v n="$n" '{ print $n }'); }
+
+# A-buffer cost over the Z-buffer (same scene and settings).
+declare -A HID_DRAW
+for hidden in zbuffer abuffer; do
+  parts=()
+  for ((r = 1; r <= REPS; r++)); do
+    # shellcheck disable=SC2086
+    $ISORAY raster $SCENE -o "$TMP/h.png" --set render.width=$W --set render.height=$H --resolution $RES \
+      --hidden $hidden >"$TMP/h.log" 2>&1 || { cat "$TMP/h.log" >&2; exit 1; }
+    parts+=("$(cli_parts "$TMP/h.log")")
+  done
+  HID_DRAW[$hidden]=$(field_median 2 "${parts[@]}")
+  echo "raster: --hidden $hidden: drawing ${HID_DRAW[$hidden]} s (median of $REPS)" >&2
+done
+AB_RATIO=$(awk -v a="${HID_DRAW[abuffer]}" -v z="${HID_DRAW[zbuffer]}" 'BEGIN { printf "%.2f", a / z }')
+
+# Environment-map methods against the ray tracer's reflections.
+RSCENE=examples/reflections.toml
+ENV_ROWS=()
+for m in none blinn-newell zbuffer-map abuffer-map; do
+  parts=(); walls=()
+  for ((r = 1; r <= REPS; r++)); do
+    t0=$(now)
+    $ISORAY raster $RSCENE -o "$OUTDIR/reflections-$m.png" --set render.width=$W --set render.height=$H \
+      --reflections $m --shadows buffer >"$TMP/e.log" 2>&1 || { cat "$TMP/e.log" >&2; exit 1; }
+    t1=$(now)
+    walls+=("$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", b - a }')")
+    parts+=("$(cli_parts "$TMP/e.log")")
+  done
+  ENV_ROWS+=("| \`isoray raster --reflections $m --shadows buffer\` | $(field_median 1 "${parts[@]}") | $(field_median 2 "${parts[@]}") | $(median ${walls[*]}) |")
+  echo "raster: --reflections $m: ${ENV_ROWS[-1]}" >&2
+done
+walls=()
+for ((r = 1; r <= REPS; r++)); do
+  t0=$(now)
+  $ISORAY render $RSCENE -o "$OUTDIR/reflections-raytrace.png" --set render.width=$W --set render.height=$H \
+    >"$TMP/rt.log" 2>&1 || { cat "$TMP/rt.log" >&2; exit 1; }
+  t1=$(now)
+  walls+=("$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", b - a }')")
+done
+ENV_ROWS+=("| \`isoray render\` (ray tracer, max_depth 2, hard shadows) | – | – | $(median ${walls[*]}) |")
+RT_LINE=$(grep -m1 '^rendered' "$TMP/rt.log" || true)
+
 LOAD_AFTER=$(cut -d' ' -f1-3 /proc/loadavg)
 CLI_LINE=$(grep -m1 '^rasterised' "$TMP/cli.log" || true)
 
@@ -135,6 +190,23 @@ RATIO=$(sed -n 's/.*"ratio_median": \([0-9.]*\).*/\1/p' "$OUTDIR/report.json" | 
     "$(awk -v k="$CLI_RSS" 'BEGIN { print k / 1024 }')"
   echo
   echo "isoray's own line (last run): ${CLI_LINE:-none}"
+  echo
+  echo "### A-buffer cost over the Z-buffer (same scene, drawing time as \`isoray raster\` reports it, median of $REPS)"
+  echo
+  echo "| hidden surfaces | drawing s |"
+  echo "|---|---:|"
+  echo "| \`--hidden zbuffer\` | ${HID_DRAW[zbuffer]} |"
+  echo "| \`--hidden abuffer\` | ${HID_DRAW[abuffer]} |"
+  echo
+  echo "**A-buffer / Z-buffer: ${AB_RATIO}x.**"
+  echo
+  echo "### Environment maps against the ray tracer's reflections ($RSCENE, ${W}x${H}, median of $REPS)"
+  echo
+  echo "| command | maps s | drawing s | whole program s |"
+  echo "|---|---:|---:|---:|"
+  printf '%s\n' "${ENV_ROWS[@]}"
+  echo
+  echo "The ray tracer's own line (last run): ${RT_LINE:-none}"
   echo
   echo "Commands (run from the repository root; the images are left in $OUTDIR/):"
   echo

@@ -1,12 +1,12 @@
 //! Scene objects → world-space triangle meshes with their materials.
 //!
 //! Each object is meshed by [`isoray_mesh::mesh_shape`] at a given
-//! resolution. Unbounded objects (planes, half-spaces) are meshed within a
-//! cube centred on the camera's target with half-size 3 × the distance from
-//! the camera to its target, which covers the visible part of a ground plane
-//! in ordinary framings (the slab's far edge may show on wide views). Sheets
-//! (unsigned fields with no sign change) and empty shapes are skipped with a
-//! warning.
+//! resolution. Unbounded objects (planes, half-spaces) are meshed within the
+//! bounding box of what the camera sees ([`unbounded_box`]): the view
+//! frustum out to `render.max_distance`, capped at [`UNBOUNDED_EXTENT`] ×
+//! the distance from the camera to its target, so a ground plane reaches the
+//! horizon in ordinary framings. Sheets (unsigned fields with no sign
+//! change) and empty shapes are skipped with a warning.
 
 use isoray_mesh::{mesh_shape, Mesh, MeshError, MeshSettings};
 use isoray_scene::Scene;
@@ -20,6 +20,8 @@ pub struct ObjectMesh {
     pub material: usize,
     /// The triangles, in world space.
     pub mesh: Mesh,
+    /// Whether the object is unbounded (meshed within [`unbounded_box`]).
+    pub unbounded: bool,
 }
 
 /// The meshed scene and what could not be meshed.
@@ -42,16 +44,33 @@ pub struct SceneMeshError {
     pub source: MeshError,
 }
 
-/// Half-size factor of the cube (around the camera target) an unbounded object is meshed in.
-pub const UNBOUNDED_EXTENT: f64 = 3.0;
+/// How far the box of unbounded objects reaches, in distances from the camera to its target.
+pub const UNBOUNDED_EXTENT: f64 = 25.0;
 
-/// The box unbounded objects are meshed in: a cube centred on the camera
-/// target with half-size [`UNBOUNDED_EXTENT`] × distance(camera, target).
+/// The box unbounded objects are meshed in: the axis-aligned bounds of the
+/// camera's view frustum (for a `render.width`×`render.height` image) from
+/// the eye out to `min(render.max_distance, UNBOUNDED_EXTENT × distance
+/// from the camera to its target)`.
 pub fn unbounded_box(scene: &Scene) -> [[f64; 3]; 2] {
-    let (p, t) = (scene.camera.position, scene.camera.target);
+    let c = &scene.camera;
+    let (p, t) = (c.position, c.target);
     let d = ((p[0] - t[0]).powi(2) + (p[1] - t[1]).powi(2) + (p[2] - t[2]).powi(2)).sqrt();
-    let h = (UNBOUNDED_EXTENT * d).max(1e-3).min(scene.render.max_distance);
-    [[t[0] - h, t[1] - h, t[2] - h], [t[0] + h, t[1] + h, t[2] + h]]
+    let far = (UNBOUNDED_EXTENT * d).max(1e-3).min(scene.render.max_distance);
+    let [forward, right, up] = c.basis();
+    let th = c.tan_half_fov();
+    let aspect = scene.render.width as f64 / scene.render.height.max(1) as f64;
+    let mut lo = p;
+    let mut hi = p;
+    for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+        let dir: [f64; 3] = std::array::from_fn(|k| forward[k] + sx * th * aspect * right[k] + sy * th * up[k]);
+        let len = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+        for k in 0..3 {
+            let q = p[k] + dir[k] / len * far;
+            lo[k] = lo[k].min(q);
+            hi[k] = hi[k].max(q);
+        }
+    }
+    [lo, hi]
 }
 
 /// Meshes every object of `scene` at `resolution` cells along the longest side.
@@ -66,7 +85,8 @@ pub fn mesh_scene(scene: &Scene, resolution: u32) -> Result<MeshedScene, SceneMe
             ..MeshSettings::default()
         };
         let mut result = mesh_shape(obj.shape.tape(), &settings);
-        if matches!(result, Err(MeshError::Unbounded)) {
+        let unbounded = matches!(result, Err(MeshError::Unbounded));
+        if unbounded {
             settings.bounds = Some(unbounded_box(scene));
             result = mesh_shape(obj.shape.tape(), &settings);
         }
@@ -77,6 +97,7 @@ pub fn mesh_scene(scene: &Scene, resolution: u32) -> Result<MeshedScene, SceneMe
                     object: i,
                     material: obj.material,
                     mesh,
+                    unbounded,
                 });
             }
             Err(e @ (MeshError::NoSignChange | MeshError::Unbounded)) => {

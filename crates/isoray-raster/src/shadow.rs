@@ -6,11 +6,15 @@
 //! Point, sphere and rectangle lights get an omnidirectional buffer (six 90°
 //! faces around the light's centre); directional lights get one narrow
 //! perspective view from far away along the light's direction (nearly
-//! orthographic), framing the whole scene.
+//! orthographic), framing the bounded objects at twice their radius (so the
+//! shadows they cast on a ground plane fit), or the whole scene when every
+//! object is unbounded. Points outside a buffer are lit.
 //!
-//! The bias grows with the texel's size at the point's depth and with the
-//! slope of the surface seen from the light: `bias = texel · (0.75 + 1.5 ·
-//! min(tan θ, 8))`, θ the angle between the normal and the light direction.
+//! Against shadow acne, the point is looked up 1.5 texels off its surface
+//! along the normal (on the light's side), and compared with a bias that
+//! grows with the texel's size at the point's depth and with the slope of
+//! the surface seen from the light: `bias = texel · (0.75 + 1.5 · min(tan θ,
+//! 8))`, θ the angle between the normal and the light direction.
 
 use glam::DVec3;
 use isoray_scene::{Camera, LightKind, Projection, Scene};
@@ -62,16 +66,22 @@ impl ShadowBuffer {
     /// The fraction (0–1) of the 3×3 percentage-closer filter that sees point
     /// `p` (unit normal `n`, unit direction `l` toward the light) lit.
     pub fn visibility(&self, p: DVec3, n: DVec3, l: DVec3) -> f32 {
-        let f = if self.omni {
-            face_of(p - DVec3::from(self.views[0].eye()))
-        } else {
-            0
-        };
-        let view = &self.views[f];
-        let Some([sx, sy, w]) = view.to_screen(p.to_array()) else {
+        let eye = DVec3::from(self.views[0].eye());
+        let f = if self.omni { face_of(p - eye) } else { 0 };
+        let n_px = self.size as f64;
+        // Normal offset: look the point up a texel and a half off its surface,
+        // on the light's side, then compare with a slope-scaled bias.
+        let Some([_, _, w0]) = self.views[f].to_screen(p.to_array()) else {
             return 1.0;
         };
-        let n_px = self.size as f64;
+        let texel0 = 2.0 * w0 * self.tan_half / n_px;
+        let side = if n.dot(l) >= 0.0 { n } else { -n };
+        let q = p + side * (1.5 * texel0);
+        let f = if self.omni { face_of(q - eye) } else { f };
+        let view = &self.views[f];
+        let Some([sx, sy, w]) = view.to_screen(q.to_array()) else {
+            return 1.0;
+        };
         if !(-0.5..n_px - 0.5).contains(&sx) || !(-0.5..n_px - 0.5).contains(&sy) {
             return 1.0;
         }
@@ -105,9 +115,20 @@ impl ShadowBuffers {
     /// Renders a `size`×`size` buffer (per face) for every light of `scene`.
     pub fn build(scene: &Scene, tris: &SceneTriangles, size: usize, near: f64) -> Self {
         let size = size.max(1);
+        // Directional buffers frame the bounded objects (twice their radius,
+        // for the shadows they cast on unbounded ones such as a ground
+        // plane), or everything when there are none.
         let [lo, hi] = tris.bounds;
-        let centre = if tris.is_empty() { DVec3::ZERO } else { (lo + hi) * 0.5 };
-        let radius = tris.radius_from(centre).max(1e-6);
+        let [blo, bhi] = tris.bounded;
+        let (centre, radius) = if blo.cmple(bhi).all() {
+            let c = (blo + bhi) * 0.5;
+            (c, ((bhi - blo).length()).max(1e-6))
+        } else if tris.is_empty() {
+            (DVec3::ZERO, 1.0)
+        } else {
+            let c = (lo + hi) * 0.5;
+            (c, tris.radius_from(c).max(1e-6))
+        };
         let lights = scene
             .lights
             .iter()

@@ -23,6 +23,9 @@ pub struct SceneTriangles {
     /// Axis-aligned bounds of all corners (`[min, max]`); empty scenes have
     /// `min > max`.
     pub bounds: [DVec3; 2],
+    /// Axis-aligned bounds of the triangles of bounded objects (empty, with
+    /// `min > max`, when every object is unbounded).
+    pub bounded: [DVec3; 2],
 }
 
 impl SceneTriangles {
@@ -31,6 +34,7 @@ impl SceneTriangles {
     pub fn new(meshed: &MeshedScene) -> Self {
         let mut out = SceneTriangles {
             bounds: [DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)],
+            bounded: [DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)],
             ..SceneTriangles::default()
         };
         for om in &meshed.objects {
@@ -47,6 +51,10 @@ impl SceneTriangles {
                 for p in corners {
                     out.bounds[0] = out.bounds[0].min(p);
                     out.bounds[1] = out.bounds[1].max(p);
+                    if !om.unbounded {
+                        out.bounded[0] = out.bounded[0].min(p);
+                        out.bounded[1] = out.bounded[1].max(p);
+                    }
                 }
                 out.corners.push(corners);
                 out.normals.push(normals);

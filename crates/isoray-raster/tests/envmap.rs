@@ -46,6 +46,7 @@ fn meshed(objects: Vec<(usize, Mesh)>) -> MeshedScene {
                 object: i,
                 material,
                 mesh,
+                unbounded: false,
             })
             .collect(),
         warnings: Vec::new(),
