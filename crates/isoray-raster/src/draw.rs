@@ -34,7 +34,8 @@ pub struct Projected {
 pub enum Cull {
     /// Keep every triangle.
     None,
-    /// Drop triangles whose outward face normal points away from the eye.
+    /// Drop triangles whose outward face normal points away from the eye
+    /// (except those of two-sided objects).
     Back,
     /// Drop the triangle whatever its facing.
     All,
@@ -58,7 +59,7 @@ pub fn project(
             let centroid = (corners[0] + corners[1] + corners[2]) / 3.0;
             let keep = match cull(t) {
                 Cull::None => true,
-                Cull::Back => tris.face[t].dot(centroid - eye) <= 0.0,
+                Cull::Back => tris.two_sided[t] || tris.face[t].dot(centroid - eye) <= 0.0,
                 Cull::All => false,
             };
             let pieces = if keep {

@@ -22,6 +22,8 @@ pub struct ObjectMesh {
     pub mesh: Mesh,
     /// Whether the object is unbounded (meshed within [`unbounded_box`]).
     pub unbounded: bool,
+    /// Whether both sides are drawn (open surfaces: never back-face culled).
+    pub two_sided: bool,
 }
 
 /// The meshed scene and what could not be meshed.
@@ -98,6 +100,7 @@ pub fn mesh_scene(scene: &Scene, resolution: u32) -> Result<MeshedScene, SceneMe
                     material: obj.material,
                     mesh,
                     unbounded,
+                    two_sided: false,
                 });
             }
             Err(e @ (MeshError::NoSignChange | MeshError::Unbounded)) => {
@@ -107,6 +110,26 @@ pub fn mesh_scene(scene: &Scene, resolution: u32) -> Result<MeshedScene, SceneMe
         }
     }
     Ok(out)
+}
+
+impl MeshedScene {
+    /// Adds a mesh that is not one of the scene's objects (a mesh file, a
+    /// tessellated parametric surface) with material `material`: it gets the
+    /// object index `scene.objects.len()` + its rank among the added meshes
+    /// (`first_extra`), its normals are filled when missing, and it is drawn
+    /// two-sided unless it is closed (every edge shared by two triangles).
+    pub fn add(&mut self, first_extra: usize, material: usize, mut mesh: Mesh) {
+        ensure_normals(&mut mesh);
+        let closed = mesh.topology().is_watertight();
+        let object = first_extra + self.objects.iter().filter(|o| o.object >= first_extra).count();
+        self.objects.push(ObjectMesh {
+            object,
+            material,
+            mesh,
+            unbounded: false,
+            two_sided: !closed,
+        });
+    }
 }
 
 /// Fills `mesh.normals` with area-weighted face normals when it has none.

@@ -18,8 +18,10 @@ pub struct SceneTriangles {
     pub face: Vec<DVec3>,
     /// Material index (into `scene.materials`).
     pub material: Vec<u32>,
-    /// Object index (into `scene.objects`).
+    /// Object index (into `scene.objects`; added meshes come after them).
     pub object: Vec<u32>,
+    /// Whether the triangle's object is drawn from both sides (never culled).
+    pub two_sided: Vec<bool>,
     /// Axis-aligned bounds of all corners (`[min, max]`); empty scenes have
     /// `min > max`.
     pub bounds: [DVec3; 2],
@@ -61,6 +63,7 @@ impl SceneTriangles {
                 out.face.push(face);
                 out.material.push(om.material as u32);
                 out.object.push(om.object as u32);
+                out.two_sided.push(om.two_sided);
             }
         }
         out

@@ -47,6 +47,7 @@ fn meshed(objects: Vec<(usize, Mesh)>) -> MeshedScene {
                 material,
                 mesh,
                 unbounded: false,
+                two_sided: false,
             })
             .collect(),
         warnings: Vec::new(),

@@ -158,6 +158,14 @@ enum Command {
         /// Mesh resolution: cells along each object's longest side (default 96).
         #[arg(long, value_name = "N")]
         resolution: Option<u32>,
+        /// Also draw a mesh file (.stl, .obj, .ply or .glb, world coordinates),
+        /// with a scene material (default: the scene's first material).
+        #[arg(long = "add-mesh", value_name = "FILE[@MATERIAL]")]
+        add_mesh: Vec<String>,
+        /// Also draw a parametric surface of the scene (`[surface.NAME]`),
+        /// tessellated over its (s, t) domain, with a scene material.
+        #[arg(long = "add-surface", value_name = "NAME[@MATERIAL]")]
+        add_surface: Vec<String>,
         /// Image width (overrides render.width).
         #[arg(long, value_name = "W")]
         width: Option<u32>,
@@ -315,6 +323,8 @@ fn main() -> ExitCode {
             map_size,
             error_vs_raytrace,
             resolution,
+            add_mesh,
+            add_surface,
             width,
             height,
             set,
@@ -334,6 +344,8 @@ fn main() -> ExitCode {
                 map_size,
                 error_vs_raytrace: error_vs_raytrace.as_deref(),
                 resolution,
+                add_mesh: &add_mesh,
+                add_surface: &add_surface,
                 overrides: &overrides,
                 threads,
                 quiet,

@@ -7,11 +7,14 @@ use std::path::Path;
 use std::time::Instant;
 
 use clap::ValueEnum;
+use isoray_mesh::parametric::{tessellate, TessellationSettings};
 use isoray_raster::compare::{error_vs_raytrace, ErrorReport};
-use isoray_raster::render::{raster, HiddenSurface, RasterOptions, ReflectionMethod, ShadowMethod};
+use isoray_raster::render::{raster_meshes, HiddenSurface, RasterOptions, ReflectionMethod, ShadowMethod};
+use isoray_raster::scene::{mesh_scene, MeshedScene};
 use isoray_raster::shading::Shading;
 use isoray_render::output;
 use isoray_scene::load;
+use isoray_scene::Scene;
 
 use crate::{io_failure, usage, Failure};
 
@@ -70,6 +73,8 @@ pub(crate) struct RasterArgs<'a> {
     pub map_size: Option<u32>,
     pub error_vs_raytrace: Option<&'a Path>,
     pub resolution: Option<u32>,
+    pub add_mesh: &'a [String],
+    pub add_surface: &'a [String],
     pub overrides: &'a [String],
     pub threads: Option<usize>,
     pub quiet: bool,
@@ -134,9 +139,17 @@ pub(crate) fn cmd_raster(a: &RasterArgs) -> Result<(), Failure> {
         .build()
         .map_err(|e| io_failure(format!("cannot start worker threads: {e}")))?;
     let start = Instant::now();
-    let image = pool.install(|| raster(&scene, &opts)).map_err(|e| match e {
-        isoray_raster::render::RasterError::Mesh(_) => io_failure(e.to_string()),
-        _ => usage(e.to_string()),
+    let image = pool.install(|| -> Result<_, Failure> {
+        let t0 = Instant::now();
+        let mut meshed = mesh_scene(&scene, opts.resolution).map_err(|e| io_failure(e.to_string()))?;
+        add_extras(a, &scene, &mut meshed)?;
+        let mesh_secs = t0.elapsed().as_secs_f64();
+        let mut image = raster_meshes(&scene, &meshed, &opts).map_err(|e| match e {
+            isoray_raster::render::RasterError::Mesh(_) => io_failure(e.to_string()),
+            _ => usage(e.to_string()),
+        })?;
+        image.timings.mesh = mesh_secs;
+        Ok(image)
     })?;
     for w in &image.warnings {
         eprintln!("warning: {w}");
@@ -177,6 +190,52 @@ pub(crate) fn cmd_raster(a: &RasterArgs) -> Result<(), Failure> {
                 report_path.display()
             );
         }
+    }
+    Ok(())
+}
+
+/// `SPEC` = `NAME[@MATERIAL]`: the name and the material's index (default: the scene's first material).
+fn name_and_material<'s>(flag: &str, spec: &'s str, scene: &Scene) -> Result<(&'s str, usize), Failure> {
+    let (name, material) = match spec.rsplit_once('@') {
+        Some((n, m)) => (n, Some(m)),
+        None => (spec, None),
+    };
+    if name.is_empty() {
+        return Err(usage(format!("{flag} `{spec}`: expected NAME[@MATERIAL]")));
+    }
+    let index = match material {
+        None => 0,
+        Some(m) => scene.materials.iter().position(|x| x.name == m).ok_or_else(|| {
+            let names: Vec<&str> = scene.materials.iter().map(|x| x.name.as_str()).collect();
+            usage(format!(
+                "{flag} `{spec}`: the scene has no material `{m}` (it has: {})",
+                names.join(", ")
+            ))
+        })?,
+    };
+    Ok((name, index))
+}
+
+/// Adds the `--add-mesh` files and `--add-surface` tessellations to the meshed scene.
+fn add_extras(a: &RasterArgs, scene: &Scene, meshed: &mut MeshedScene) -> Result<(), Failure> {
+    let first = scene.objects.len();
+    for spec in a.add_mesh {
+        let (path, m) = name_and_material("--add-mesh", spec, scene)?;
+        let mesh = isoray_mesh::io::read(Path::new(path)).map_err(|e| usage(e.to_string()))?;
+        if mesh.triangles.is_empty() {
+            return Err(usage(format!("--add-mesh `{path}`: the file has no triangles")));
+        }
+        meshed.add(first, m, mesh);
+    }
+    for spec in a.add_surface {
+        let (name, m) = name_and_material("--add-surface", spec, scene)?;
+        let coords = scene
+            .library
+            .parametric_coords(name, None)
+            .map_err(|d| usage(format!("--add-surface `{name}`: {}", d.message)))?;
+        let (mesh, _) = tessellate(&coords, &TessellationSettings::default())
+            .map_err(|e| usage(format!("--add-surface `{name}`: {e}")))?;
+        meshed.add(first, m, mesh);
     }
     Ok(())
 }

@@ -155,3 +155,68 @@ fn reflections_shadows_and_the_report() {
         assert_eq!(image::open(&reference).unwrap().to_rgb8().dimensions(), (48, 32));
     }
 }
+
+#[test]
+fn mesh_files_and_parametric_surfaces_are_drawn_too() {
+    let scene = scene_file();
+    // A mesh file: a ball beside the scene's sphere, meshed by isoray itself.
+    let ball_scene = tmp("ball.toml");
+    std::fs::write(
+        &ball_scene,
+        SCENE.replace("sphere(p - vec3(0.0, 0.5, 0.0)", "sphere(p - vec3(1.2, 0.4, 0.0)"),
+    )
+    .unwrap();
+    let stl = tmp("ball.stl");
+    let o = isoray()
+        .args(["mesh"])
+        .arg(&ball_scene)
+        .arg("-o")
+        .arg(&stl)
+        .args(["--resolution", "24", "-q"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // A parametric surface: a flat patch over the ground.
+    let with_surface = tmp("surface.toml");
+    std::fs::write(
+        &with_surface,
+        format!(
+            "{SCENE}\n[surface.patch]\nparametric = {{ x = \"s\", y = \"0.05\", z = \"t\" }}\ndomain = {{ s = [-1.5, -0.5], t = [-0.5, 0.5] }}\n"
+        ),
+    )
+    .unwrap();
+    let render = |scene: &std::path::Path, extra: &[&str], name: &str| {
+        let out = tmp(name);
+        let o = isoray()
+            .arg("raster")
+            .arg(scene)
+            .arg("-o")
+            .arg(&out)
+            .args(["--resolution", "24"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&o.stderr));
+        image::open(&out).unwrap().to_rgb8()
+    };
+    let base = render(&scene, &[], "base.png");
+    let stl_arg = format!("{}@grey", stl.display());
+    let with_mesh = render(&scene, &["--add-mesh", &stl_arg], "mesh.png");
+    let with_patch = render(&with_surface, &["--add-surface", "patch"], "patch.png");
+    let differ = |a: &image::RgbImage, b: &image::RgbImage| a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count();
+    assert!(differ(&base, &with_mesh) > 20, "{}", differ(&base, &with_mesh));
+    assert!(differ(&base, &with_patch) > 20, "{}", differ(&base, &with_patch));
+    // An unknown material or surface is a usage error.
+    let bad = format!("{}@nope", stl.display());
+    for args in [&["--add-mesh", bad.as_str()][..], &["--add-surface", "nope"][..]] {
+        let o = isoray()
+            .arg("raster")
+            .arg(&with_surface)
+            .arg("-o")
+            .arg(tmp("never2.png"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+    }
+}
