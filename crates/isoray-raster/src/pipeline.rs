@@ -142,11 +142,6 @@ impl ViewTransform {
         std::array::from_fn(|k| self.eye[k] + cx * self.right[k] + cy * self.up[k] + w * self.forward[k])
     }
 
-    /// The unit viewing axis (forward) in world space.
-    pub fn forward(&self) -> [f64; 3] {
-        self.forward
-    }
-
     /// The eye position in world space.
     pub fn eye(&self) -> [f64; 3] {
         self.eye
