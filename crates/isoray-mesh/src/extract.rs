@@ -75,9 +75,21 @@ pub struct MeshStats {
     pub seconds: f64,
 }
 
+/// The mesher evaluates a shape at one moment: its inputs must be fixed.
+fn require_bound(tape: &Tape) -> Result<(), MeshError> {
+    if tape.vars().is_empty() {
+        Ok(())
+    } else {
+        Err(MeshError::Settings(
+            "the shape reads runtime inputs (the time or parameters): fix them first with Tape::bind".into(),
+        ))
+    }
+}
+
 /// The box that [`mesh_shape`] finds for the surface f = `offset` of
 /// `tape` before padding it (see [`MeshSettings::lipschitz`]).
 pub fn shape_bounds(tape: &Tape, offset: f64, lipschitz: f64) -> Result<[[f64; 3]; 2], MeshError> {
+    require_bound(tape)?;
     find_bounds(tape, offset, lipschitz.max(1.0), &Control::none())
 }
 
@@ -101,6 +113,7 @@ pub fn mesh_shape_with(tape: &Tape, settings: &MeshSettings, ctl: &Control) -> R
         timings.push((stage, lap.elapsed().as_secs_f64()));
         *lap = Instant::now();
     };
+    require_bound(tape)?;
     if !(settings.lipschitz >= 1.0 && settings.lipschitz.is_finite()) {
         return Err(MeshError::Settings(format!(
             "lipschitz must be a number ≥ 1, found {}",

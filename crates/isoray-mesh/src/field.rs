@@ -82,7 +82,7 @@ impl<'t> Field<'t> {
         for (k, v) in xyz.iter_mut().enumerate() {
             v.extend(points.iter().map(|p| p[k]));
         }
-        ev.eval(&xyz[0], &xyz[1], &xyz[2], out);
+        ev.eval(&[], &xyz[0], &xyz[1], &xyz[2], out);
         for (v, p) in out.iter_mut().zip(points) {
             // NaN stays NaN (f64::max would drop it) so that it is reported.
             if !v.is_nan() {

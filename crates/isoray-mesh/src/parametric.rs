@@ -305,6 +305,7 @@ impl<'a> Evaluator<'a> {
         let (mut p, mut ds, mut dt) = ([0.0; 3], [0.0; 3], [0.0; 3]);
         for (k, e) in self.e.iter_mut().enumerate() {
             let v = e.eval(
+                &[],
                 Dual {
                     v: s,
                     d: [1.0, 0.0, 0.0],

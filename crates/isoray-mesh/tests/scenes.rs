@@ -17,7 +17,8 @@ fn check(label: &str, scene: &Scene, object: &str, settings: &MeshSettings, tol_
         .iter()
         .find(|o| o.name.as_deref() == Some(object))
         .unwrap_or_else(|| panic!("{label}: no object {object}"));
-    let (m, s) = mesh_shape(o.shape.tape(), settings).unwrap_or_else(|e| panic!("{label} {object}: {e}"));
+    let (m, s) =
+        mesh_shape(scene.frozen(&o.shape).tape(), settings).unwrap_or_else(|e| panic!("{label} {object}: {e}"));
     let t = m.topology();
     assert!(
         m.triangles.len() > 1000,
@@ -46,7 +47,7 @@ fn showcase_objects_are_closed_manifolds() {
     };
     let mut meshed = 0;
     for (i, o) in sc.objects.iter().enumerate() {
-        match mesh_shape(o.shape.tape(), &settings) {
+        match mesh_shape(sc.frozen(&o.shape).tape(), &settings) {
             Ok((m, _)) => {
                 let t = m.topology();
                 assert!(t.is_closed_manifold(), "showcase object {i}: {t:?}");
@@ -73,7 +74,7 @@ fn gallery_objects_have_no_folds() {
             ..MeshSettings::default()
         };
         for (i, o) in sc.objects.iter().enumerate() {
-            match mesh_shape(o.shape.tape(), &settings) {
+            match mesh_shape(sc.frozen(&o.shape).tape(), &settings) {
                 Ok((m, s)) => {
                     let t = m.topology();
                     assert!(t.is_closed_manifold(), "gallery object {i} at {resolution}: {t:?}");
@@ -113,7 +114,10 @@ fn a_sheet_gets_a_closed_shell_with_an_offset() {
         ..MeshSettings::default()
     };
     // |kummer| clipped to a ball is a sheet: no inside to mesh.
-    assert_eq!(mesh_shape(o.shape.tape(), &plain).unwrap_err(), MeshError::NoSignChange);
+    assert_eq!(
+        mesh_shape(sc.frozen(&o.shape).tape(), &plain).unwrap_err(),
+        MeshError::NoSignChange
+    );
     let shell = MeshSettings { offset: 0.04, ..plain };
     // The shell creases where the sheet has nodes (double cones), so the
     // vertices there are looser.

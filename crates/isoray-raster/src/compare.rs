@@ -111,7 +111,7 @@ pub fn true_reflection(scene: &Scene, probe: &ReflectionProbe) -> Option<u32> {
         if d.abs() < eps {
             let mut best = (f64::INFINITY, None);
             for (i, o) in scene.objects.iter().enumerate() {
-                let di = o.shape.eval(x.to_array()).abs();
+                let di = o.shape.eval_with(&scene.inputs, x.to_array()).abs();
                 if di < best.0 {
                     best = (di, Some(i as u32));
                 }

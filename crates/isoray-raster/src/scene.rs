@@ -86,11 +86,12 @@ pub fn mesh_scene(scene: &Scene, resolution: u32) -> Result<MeshedScene, SceneMe
             lipschitz,
             ..MeshSettings::default()
         };
-        let mut result = mesh_shape(obj.shape.tape(), &settings);
+        let shape = scene.frozen(&obj.shape);
+        let mut result = mesh_shape(shape.tape(), &settings);
         let unbounded = matches!(result, Err(MeshError::Unbounded));
         if unbounded {
             settings.bounds = Some(unbounded_box(scene));
-            result = mesh_shape(obj.shape.tape(), &settings);
+            result = mesh_shape(shape.tape(), &settings);
         }
         match result {
             Ok((mut mesh, _)) => {

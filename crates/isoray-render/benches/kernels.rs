@@ -45,14 +45,14 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Elements(n as u64));
     g.bench_function("batch_f32", |b| {
         let mut e = BatchEvaluator::<f32>::new(tape);
-        b.iter(|| e.eval(&xs, &ys, &zs, &mut out))
+        b.iter(|| e.eval(&scene.inputs, &xs, &ys, &zs, &mut out))
     });
     g.bench_function("point_f64", |b| {
         let mut e = PointEvaluator::<f64>::new(tape);
         b.iter(|| {
             let mut acc = 0.0;
             for i in 0..n {
-                acc += e.eval(xs[i] as f64, ys[i] as f64, zs[i] as f64);
+                acc += e.eval(&scene.inputs, xs[i] as f64, ys[i] as f64, zs[i] as f64);
             }
             acc
         })

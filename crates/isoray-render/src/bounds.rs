@@ -60,6 +60,7 @@ pub fn check_object(scene: &Scene, object: usize, nx: u32, ny: u32) -> BoundChec
     let (w, h) = (scene.render.width, scene.render.height);
     let cam = RayCamera::new(&scene.camera, w, h);
     let tape = scene.objects[object].shape.tape();
+    let vars: &[f64] = &scene.inputs;
     let tmax = scene.render.max_distance;
     let max_step = tmax / 400.0;
     let origin = cam.origin().to_array();
@@ -79,7 +80,7 @@ pub fn check_object(scene: &Scene, object: usize, nx: u32, ny: u32) -> BoundChec
                 let at = |t: f64| [origin[0] + d[0] * t, origin[1] + d[1] * t, origin[2] + d[2] * t];
                 let mut f = |t: f64| {
                     let p = at(t);
-                    ev.eval(p[0], p[1], p[2])
+                    ev.eval(vars, p[0], p[1], p[2])
                 };
                 let mut samples: Vec<(f64, f64)> = Vec::new();
                 let mut t = 0.0;

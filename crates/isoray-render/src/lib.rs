@@ -39,12 +39,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::Vec3;
 use isoray_scene::{LightKind, NormalMethod, Scene, ShadowMode, View};
-use isoray_shape::{BatchEvaluator, GradientMode};
+use isoray_shape::GradientMode;
 use rayon::prelude::*;
 
 use camera::RayCamera;
 use shade::Surface;
-use trace::{shadow_march, sphere_trace, sphere_trace_capped, Hit, Rays, Scratch};
+use trace::{shadow_march, sphere_trace, sphere_trace_capped, Field, Hit, Rays, Scratch};
 
 /// Tile edge in pixels.
 pub const TILE: u32 = 16;
@@ -243,20 +243,20 @@ impl<'s> Ctx<'s> {
 
 /// Per-thread state: evaluators and scratch buffers.
 struct Worker<'s> {
-    scene_eval: BatchEvaluator<'s, f32>,
+    scene_eval: Field<'s>,
     /// The unsigned distance to the nearest surface, for rays inside objects.
-    surf_eval: BatchEvaluator<'s, f32>,
+    surf_eval: Field<'s>,
     /// What shadow rays trace when some object is transparent.
     shadow_evals: Option<whitted::ShadowEvals<'s>>,
     /// The union of the objects that are not planes or spheres (those are
     /// intersected in closed form), when some are.
-    rest_eval: Option<BatchEvaluator<'s, f32>>,
+    rest_eval: Option<Field<'s>>,
     caps: Vec<f32>,
     /// Rays traced, by kind (summed over tiles).
     counts: RayCounts,
     /// The current tile's top-left pixel (seeds the light samples).
     tile_origin: (u32, u32),
-    object_evals: Vec<BatchEvaluator<'s, f32>>,
+    object_evals: Vec<Field<'s>>,
     scratch: Scratch,
     rays: Rays,
     hits: Vec<Hit>,
@@ -277,26 +277,27 @@ struct HitSet {
 
 impl<'s> Worker<'s> {
     fn new(ctx: &Ctx<'s>) -> Self {
+        let vars: &'s [f64] = &ctx.scene.inputs;
         let object_evals = if ctx.scene.objects.len() > 1 {
             ctx.scene
                 .objects
                 .iter()
-                .map(|o| BatchEvaluator::new(o.shape.tape()))
+                .map(|o| Field::new(o.shape.tape(), vars))
                 .collect()
         } else {
             Vec::new()
         };
         Worker {
-            scene_eval: BatchEvaluator::new(ctx.scene.shape.tape()),
-            surf_eval: BatchEvaluator::new(ctx.scene.surfaces.tape()),
+            scene_eval: Field::new(ctx.scene.shape.tape(), vars),
+            surf_eval: Field::new(ctx.scene.surfaces.tape(), vars),
             counts: RayCounts::default(),
-            rest_eval: ctx.scene.rest.as_ref().map(|r| BatchEvaluator::new(r.tape())),
+            rest_eval: ctx.scene.rest.as_ref().map(|r| Field::new(r.tape(), vars)),
             caps: Vec::new(),
             tile_origin: (0, 0),
             shadow_evals: ctx.scene.shadow.as_ref().map(|sh| whitted::ShadowEvals {
-                opaque: BatchEvaluator::new(sh.opaque.tape()),
-                clear: BatchEvaluator::new(sh.transparent.tape()),
-                clear_surfaces: BatchEvaluator::new(sh.transparent_surfaces.tape()),
+                opaque: Field::new(sh.opaque.tape(), vars),
+                clear: Field::new(sh.transparent.tape(), vars),
+                clear_surfaces: Field::new(sh.transparent_surfaces.tape(), vars),
             }),
             object_evals,
             scratch: Scratch::default(),

@@ -3,7 +3,45 @@
 //! shape tape runs over structure-of-arrays blocks (the hot path).
 
 use isoray_scene::{RenderSettings, ShadowMode};
-use isoray_shape::BatchEvaluator;
+use isoray_shape::{BatchEvaluator, GradientMode, Tape};
+
+/// A distance field ready to evaluate in a frame: a batch evaluator of its
+/// tape and the frame's runtime inputs (the time and the parameters).
+#[derive(Debug, Clone)]
+pub struct Field<'s> {
+    eval: BatchEvaluator<'s, f32>,
+    vars: &'s [f64],
+}
+
+impl<'s> Field<'s> {
+    /// The field of `tape` with the inputs `vars`.
+    pub fn new(tape: &'s Tape, vars: &'s [f64]) -> Self {
+        Field {
+            eval: BatchEvaluator::new(tape),
+            vars,
+        }
+    }
+
+    /// Distances at the points into `out`.
+    pub fn eval(&mut self, xs: &[f32], ys: &[f32], zs: &[f32], out: &mut [f32]) {
+        self.eval.eval(self.vars, xs, ys, zs, out);
+    }
+
+    /// Gradients at the points (see [`BatchEvaluator::gradients`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn gradients(
+        &mut self,
+        xs: &[f32],
+        ys: &[f32],
+        zs: &[f32],
+        mode: GradientMode,
+        gx: &mut [f32],
+        gy: &mut [f32],
+        gz: &mut [f32],
+    ) {
+        self.eval.gradients(self.vars, xs, ys, zs, mode, gx, gy, gz);
+    }
+}
 
 /// Scratch buffers reused across packets (no allocation per ray).
 #[derive(Debug, Default)]
@@ -27,7 +65,7 @@ pub struct Scratch {
 impl Scratch {
     /// Gathers the points o + t·d of the active rays and evaluates the
     /// distance there into `self.ds`. Returns the number of evaluations.
-    fn eval_active(&mut self, eval: &mut BatchEvaluator<f32>, rays: &Rays, t: impl Fn(usize) -> f32) -> u64 {
+    fn eval_active(&mut self, eval: &mut Field, rays: &Rays, t: impl Fn(usize) -> f32) -> u64 {
         let m = self.active.len();
         for v in [&mut self.xs, &mut self.ys, &mut self.zs, &mut self.ds] {
             v.resize(m, 0.0);
@@ -105,7 +143,7 @@ pub struct Hit {
 
 /// Sphere-traces every ray of the packet. Returns the number of distance evaluations.
 pub fn sphere_trace(
-    eval: &mut BatchEvaluator<f32>,
+    eval: &mut Field,
     rays: &Rays,
     s: &RenderSettings,
     scratch: &mut Scratch,
@@ -118,7 +156,7 @@ pub fn sphere_trace(
 /// surface found in closed form there: the ray hits it unless the march
 /// finds one before). Returns the number of distance evaluations.
 pub fn sphere_trace_capped(
-    eval: &mut BatchEvaluator<f32>,
+    eval: &mut Field,
     rays: &Rays,
     s: &RenderSettings,
     scratch: &mut Scratch,
@@ -185,7 +223,7 @@ pub fn sphere_trace_capped(
 /// size and `tmax` the distance to the light (per ray). Returns evaluations.
 #[allow(clippy::too_many_arguments)]
 pub fn shadow_march(
-    eval: &mut BatchEvaluator<f32>,
+    eval: &mut Field,
     rays: &Rays,
     tmax: &[f32],
     mode: ShadowMode,

@@ -12,8 +12,6 @@
 
 use glam::Vec3;
 
-use isoray_shape::BatchEvaluator;
-
 use crate::lights::hash;
 use crate::optics::{fresnel, reflect, refract, split};
 use crate::shade::Surface;
@@ -23,11 +21,11 @@ use crate::{Ctx, HitSet, Worker};
 /// The fields shadow rays trace when some object is transparent.
 pub(crate) struct ShadowEvals<'s> {
     /// The union of the opaque objects (occluders).
-    pub(crate) opaque: BatchEvaluator<'s, f32>,
+    pub(crate) opaque: crate::trace::Field<'s>,
     /// The union of the transparent objects.
-    pub(crate) clear: BatchEvaluator<'s, f32>,
+    pub(crate) clear: crate::trace::Field<'s>,
     /// The unsigned distance to the nearest transparent surface.
-    pub(crate) clear_surfaces: BatchEvaluator<'s, f32>,
+    pub(crate) clear_surfaces: crate::trace::Field<'s>,
 }
 
 /// Interfaces a shadow ray crosses at most (it keeps its transmission after).

@@ -59,17 +59,17 @@ impl Analytic {
         }
     }
 
-    /// Recognises a plane or a sphere.
-    pub fn recognise(shape: &Shape) -> Option<Analytic> {
+    /// Recognises a plane or a sphere, with the inputs `vars`.
+    pub fn recognise(shape: &Shape, vars: &[f64]) -> Option<Analytic> {
         let pts = probes();
         let matches = |a: &Analytic| {
             pts.iter().all(|&p| {
-                let (d, e) = (shape.eval(p), a.distance(p));
+                let (d, e) = (shape.eval_with(vars, p), a.distance(p));
                 d.is_finite() && (d - e).abs() <= 1e-9 * (1.0 + e.abs())
             })
         };
-        let g0 = shape.gradient(pts[0], GradientMode::Dual);
-        let d0 = shape.eval(pts[0]);
+        let g0 = shape.gradient_with(vars, pts[0], GradientMode::Dual);
+        let d0 = shape.eval_with(vars, pts[0]);
         if !d0.is_finite() || !g0.iter().all(|x| x.is_finite()) {
             return None;
         }
@@ -84,7 +84,7 @@ impl Analytic {
             }
         }
         // Sphere: c = p − (d + r)∇d; with a second point, |p₁ − c| = d₁ + r.
-        let (p1, d1) = (pts[1], shape.eval(pts[1]));
+        let (p1, d1) = (pts[1], shape.eval_with(vars, pts[1]));
         // |p₁ − p₀ + (d₀ + r) g₀| = d₁ + r: a quadratic in s = d₀ + r.
         let w = sub(p1, pts[0]);
         let k = d1 - d0; // d₁ + r = s + k
@@ -142,7 +142,7 @@ mod tests {
     use isoray_shape::{compile, Library};
 
     fn rec(text: &str) -> Option<Analytic> {
-        Analytic::recognise(&compile(&Library::new(), text).unwrap())
+        Analytic::recognise(&compile(&Library::new(), text).unwrap(), &[])
     }
 
     #[test]

@@ -99,6 +99,19 @@ impl Sources {
 }
 
 impl SceneError {
+    /// Bad input that belongs to no place in the file (a command-line value).
+    pub fn usage(message: impl Into<String>) -> SceneError {
+        let message = message.into();
+        SceneError {
+            rendered: format!("error: {message}"),
+            message,
+            file: String::new(),
+            line: None,
+            column: None,
+            io: false,
+        }
+    }
+
     /// An error reading or writing a file.
     pub fn io(path: &str, what: &str, err: &std::io::Error) -> SceneError {
         let message = format!("cannot {what} `{path}`: {err}");

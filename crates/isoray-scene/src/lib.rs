@@ -26,5 +26,5 @@ mod load;
 mod model;
 
 pub use error::{SceneError, Sources};
-pub use load::{load, load_str, RENDER_KEYS};
+pub use load::{load, load_str, load_str_with, load_with, LoadOptions, RENDER_KEYS};
 pub use model::*;

@@ -17,15 +17,42 @@ use crate::model::*;
 
 type Result<T> = std::result::Result<T, SceneError>;
 
+/// How a scene is loaded.
+#[derive(Debug, Clone, Default)]
+pub struct LoadOptions {
+    /// The time `t` in seconds (default 0).
+    pub time: f64,
+    /// A cache of surface analyses to use (and fill), shared with earlier
+    /// loads: a surface already derived for the same content and values is
+    /// not derived again.
+    pub analyses: Option<isoray_shape::Analyses>,
+}
+
 /// Reads and loads a scene file, applying `--set KEY=VALUE` overrides.
 pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
+    load_with(path, overrides, &LoadOptions::default())
+}
+
+/// Reads and loads a scene file at the given options (the time).
+pub fn load_with(path: &Path, overrides: &[String], options: &LoadOptions) -> Result<Scene> {
     let name = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| SceneError::io(&name, "read", &e))?;
-    load_str(&text, &name, overrides)
+    load_str_with(&text, &name, overrides, options)
 }
 
 /// Loads a scene from text; `name` is used in error messages.
 pub fn load_str(text: &str, name: &str, overrides: &[String]) -> Result<Scene> {
+    load_str_with(text, name, overrides, &LoadOptions::default())
+}
+
+/// Loads a scene from text at the given options (the time).
+pub fn load_str_with(text: &str, name: &str, overrides: &[String], options: &LoadOptions) -> Result<Scene> {
+    if !options.time.is_finite() {
+        return Err(SceneError::usage(format!(
+            "the time must be a finite number of seconds, found {}",
+            options.time
+        )));
+    }
     let src = Sources {
         path: name.to_string(),
         text: text.to_string(),
@@ -40,7 +67,7 @@ pub fn load_str(text: &str, name: &str, overrides: &[String]) -> Result<Scene> {
     for (i, ov) in overrides.iter().enumerate() {
         apply_override(&src, &mut root, i, ov)?;
     }
-    build(&src, &root)
+    build(&src, &root, options)
 }
 
 const TOP_KEYS: &[&str] = &[
@@ -90,6 +117,15 @@ fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str
         let pos = table.iter().position(|e| e.key == seg);
         if last {
             match pos {
+                // A parameter given as { default, range } keeps its range:
+                // the override sets the default, which is then checked against it.
+                Some(p) if is_param_spec(&table[p].value) && !matches!(value.item, Item::Table(_)) => {
+                    if let Item::Table(spec) = &mut table[p].value.item {
+                        if let Some(d) = spec.iter_mut().find(|e| e.key == "default") {
+                            d.value = value;
+                        }
+                    }
+                }
                 Some(p) => table[p].value = value,
                 None => table.push(Entry {
                     key: seg.to_string(),
@@ -179,6 +215,11 @@ fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str
             }
         }
     }
+}
+
+/// True for a parameter written as `{ default = ..., range = [...] }`.
+fn is_param_spec(v: &Located) -> bool {
+    matches!(&v.item, Item::Table(t) if t.iter().any(|e| e.key == "default"))
 }
 
 /// Reads the keys of one table, remembering which were used.
@@ -406,7 +447,7 @@ fn truncate(s: &str) -> String {
     }
 }
 
-fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
+fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> {
     let root_item = Located {
         item: Item::Table(root.to_vec()),
         origin: Origin::Implicit,
@@ -762,6 +803,10 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
 
     // [params]
     let mut lib = Library::new();
+    lib.set_time(options.time);
+    if let Some(cache) = &options.analyses {
+        lib.use_analyses(cache.clone());
+    }
     let mut params = Vec::new();
     let mut surface_materials: Vec<(String, usize)> = Vec::new();
     let mut param_ranges: Vec<ParamRange> = Vec::new();
@@ -778,6 +823,14 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
             let key = format!("params.{}", e.key);
             let val = param_spec(src, &e.value, &key, &mut param_ranges)?;
             check_name(src, &e.key, e.key_origin)?;
+            if e.key == "t" {
+                return Err(src.error(
+                    e.key_origin,
+                    "`params.t`: `t` is the built-in time in shape text",
+                    Some("choose another name"),
+                    &["shape text reads the time (seconds, `--time`) as `t`".into()],
+                ));
+            }
             lib.set_param(&e.key, val);
             params.push((e.key.clone(), val));
         }
@@ -952,9 +1005,10 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                 let Item::Str(_, map) = &loc.item else { unreachable!() };
                 let id = snippets.len();
                 snippets.push((loc, map));
-                let node = lib
-                    .compile(&mut builder, text, id)
+                let compiled = isoray_shape::syntax::parse(text, id)
+                    .and_then(|prog| lib.compile_tracked(&mut builder, &prog, id))
                     .map_err(|d| shape_error(&snippets, d))?;
+                let node = compiled.node;
                 nodes.push(node);
                 // Without a material of its own, an object takes the default
                 // material of the first surface its shape calls.
@@ -972,6 +1026,7 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
                     material,
                     source: text.to_string(),
                     shape: Shape::from_tape(builder.tape(node)),
+                    bound_inputs: compiled.bound,
                 });
             }
         }
@@ -1033,15 +1088,15 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         None
     };
     // Planes and spheres are intersected in closed form; the rest is marched.
-    let analytic: Vec<Option<crate::analytic::Analytic>> =
-        if render.blend == 0.0 && render.analytic && render.view != View::Steps {
-            objects
-                .iter()
-                .map(|o| crate::analytic::Analytic::recognise(&o.shape))
-                .collect()
-        } else {
-            vec![None; objects.len()]
-        };
+    let inputs = lib.input_values();
+    let analytic: Vec<Option<crate::analytic::Analytic>> = if analytic_allowed(&render) {
+        objects
+            .iter()
+            .map(|o| crate::analytic::Analytic::recognise(&o.shape, &inputs))
+            .collect()
+    } else {
+        vec![None; objects.len()]
+    };
     let rest = if analytic.iter().any(Option::is_some) {
         let mut acc: Option<isoray_shape::Node> = None;
         for (&n, a) in nodes.iter().zip(&analytic) {
@@ -1070,9 +1125,17 @@ fn build(src: &Sources, root: &[Entry]) -> Result<Scene> {
         environment,
         analytic,
         rest,
+        input_names: lib.input_names(),
+        inputs,
         library: lib,
         param_ranges,
+        origin: std::sync::Arc::new(SceneOrigin { sources: src.clone() }),
     })
+}
+
+/// Whether objects may be intersected in closed form with these settings.
+pub(crate) fn analytic_allowed(render: &RenderSettings) -> bool {
+    render.blend == 0.0 && render.analytic && render.view != View::Steps
 }
 
 /// `[environment]`: an equirectangular `image` or a `cube` of six faces,
@@ -1425,12 +1488,13 @@ fn param_spec(src: &Sources, v: &Located, ctx: &str, ranges: &mut Vec<ParamRange
             ));
         };
         if x < range[0] || x > range[1] {
+            let key = match dv.origin {
+                Origin::Override(_) => ctx.to_string(),
+                _ => format!("{ctx}.default"),
+            };
             return Err(src.error(
                 dv.origin,
-                format!(
-                    "`{ctx}.default` = {x} is outside its range [{}, {}]",
-                    range[0], range[1]
-                ),
+                format!("`{key}` = {x} is outside its range [{}, {}]", range[0], range[1]),
                 Some("outside the range"),
                 &[],
             ));

@@ -351,6 +351,10 @@ pub struct Object {
     pub source: String,
     /// The compiled shape.
     pub shape: Shape,
+    /// Inputs whose values were bound into `shape` as constants by exact
+    /// algebra (implicit and parametric surfaces): changing one recompiles
+    /// the object. Every other input the shape reads stays live.
+    pub bound_inputs: Vec<u32>,
 }
 
 /// A loaded, checked and compiled scene.
@@ -388,6 +392,21 @@ pub struct Scene {
     pub library: Library,
     /// Ranges declared for number parameters (for sliders), in file order.
     pub param_ranges: Vec<ParamRange>,
+    /// The current runtime inputs every shape reads: the time `t`, then
+    /// each parameter component (see [`Library::input_names`]). Pass them
+    /// to evaluators; change them with [`Scene::set_time`] and [`Scene::set_param`].
+    pub inputs: Vec<f64>,
+    /// The names of `inputs`, in order.
+    pub input_names: Vec<String>,
+    /// What the scene was loaded from, to compile it again when a value
+    /// that exact algebra bound changes.
+    pub(crate) origin: std::sync::Arc<SceneOrigin>,
+}
+
+/// The texts a scene was loaded from.
+#[derive(Debug)]
+pub(crate) struct SceneOrigin {
+    pub(crate) sources: crate::error::Sources,
 }
 
 /// The fields shadow rays trace in a scene with transparent objects.
@@ -411,9 +430,133 @@ pub struct ParamRange {
 }
 
 impl Scene {
-    /// The scene's signed distance at a point.
+    /// The scene's signed distance at a point (at the current inputs).
     pub fn distance(&self, p: [f64; 3]) -> f64 {
-        self.shape.eval(p)
+        self.shape.eval_with(&self.inputs, p)
+    }
+
+    /// `shape` with the scene's current inputs fixed: it reads no input and
+    /// gives what `shape` gives now. For consumers that take a shape at one
+    /// moment, such as the mesher.
+    pub fn frozen(&self, shape: &Shape) -> Shape {
+        Shape::from_tape(shape.tape().bind(&self.inputs))
+    }
+
+    /// The time `t` in seconds.
+    pub fn time(&self) -> f64 {
+        self.inputs.first().copied().unwrap_or(0.0)
+    }
+
+    /// Moves the scene to time `t`. Shapes read the time as an input, so
+    /// nothing is recompiled, except objects whose implicit or parametric
+    /// surfaces bound `t` into their exact analysis (then the scene is
+    /// compiled again with the analyses cached by value).
+    pub fn set_time(&mut self, t: f64) -> Result<(), crate::SceneError> {
+        if !t.is_finite() {
+            return Err(crate::SceneError::usage(format!(
+                "the time must be a finite number of seconds, found {t}"
+            )));
+        }
+        self.library.set_time(t);
+        self.update_inputs(&[isoray_shape::TIME], |inputs| inputs[0] = t)
+    }
+
+    /// Sets a number or vector parameter (`[params]`) to `value`: an error
+    /// when the parameter does not exist, has another type, or is outside
+    /// its declared range (the message names the range).
+    pub fn set_param(&mut self, name: &str, value: Value) -> Result<(), crate::SceneError> {
+        let Some((at, ty)) = self.library.param_input(name) else {
+            let names: Vec<&str> = self.library.params().iter().map(|(n, _)| n.as_str()).collect();
+            let mut msg = format!("the scene has no parameter `{name}`");
+            if let Some(s) = isoray_shape::diag::suggest(name, names.iter().copied()) {
+                msg.push_str(&format!(" (did you mean `{s}`?)"));
+            }
+            return Err(crate::SceneError::usage(msg));
+        };
+        if value.ty() != ty {
+            return Err(crate::SceneError::usage(format!(
+                "parameter `{name}` is a `{ty}`, found a `{}`",
+                value.ty()
+            )));
+        }
+        let comps: Vec<f64> = match value {
+            Value::Float(x) => vec![x],
+            Value::Vec2(a) => a.to_vec(),
+            Value::Vec3(a) => a.to_vec(),
+        };
+        if comps.iter().any(|x| !x.is_finite()) {
+            return Err(crate::SceneError::usage(format!("parameter `{name}` must be finite")));
+        }
+        let key = format!("params.{name}");
+        if let (Some(r), Value::Float(x)) = (self.param_ranges.iter().find(|r| r.key == key), value) {
+            if x < r.range[0] || x > r.range[1] {
+                return Err(crate::SceneError::usage(format!(
+                    "`{key}` = {x} is outside its range [{}, {}]",
+                    r.range[0], r.range[1]
+                )));
+            }
+        }
+        self.library.set_param(name, value);
+        if let Some(p) = self.params.iter_mut().find(|(n, _)| n == name) {
+            p.1 = value;
+        }
+        let vars: Vec<u32> = (at..at + ty.width() as u32).collect();
+        self.update_inputs(&vars, |inputs| {
+            for (k, x) in comps.iter().enumerate() {
+                inputs[at as usize + k] = *x;
+            }
+        })
+    }
+
+    /// Applies a change of inputs `vars`: recompiles objects that bound one,
+    /// and re-derives the closed forms of objects that read one.
+    fn update_inputs(&mut self, vars: &[u32], set: impl FnOnce(&mut Vec<f64>)) -> Result<(), crate::SceneError> {
+        set(&mut self.inputs);
+        let bound = self
+            .objects
+            .iter()
+            .any(|o| o.bound_inputs.iter().any(|v| vars.contains(v)));
+        if bound {
+            return self.recompile();
+        }
+        if !crate::load::analytic_allowed(&self.render) {
+            return Ok(());
+        }
+        for (i, o) in self.objects.iter().enumerate() {
+            if !o.shape.tape().vars().iter().any(|v| vars.contains(v)) {
+                continue;
+            }
+            let now = crate::analytic::Analytic::recognise(&o.shape, &self.inputs);
+            // A change of which objects are closed forms changes what is marched.
+            if now.is_some() != self.analytic[i].is_some() {
+                return self.recompile();
+            }
+            self.analytic[i] = now;
+        }
+        Ok(())
+    }
+
+    /// Compiles the scene again from its sources with the current
+    /// parameter values and time (analyses come from the cache by value).
+    fn recompile(&mut self) -> Result<(), crate::SceneError> {
+        let mut src = self.origin.sources.clone();
+        for (name, v) in &self.params {
+            let text = match v {
+                Value::Float(x) => format!("params.{name}={x:?}"),
+                Value::Vec2([x, y]) => format!("params.{name}=[{x:?}, {y:?}]"),
+                Value::Vec3([x, y, z]) => format!("params.{name}=[{x:?}, {y:?}, {z:?}]"),
+            };
+            src.overrides.push(text);
+        }
+        let opts = crate::LoadOptions {
+            time: self.time(),
+            analyses: Some(self.library.analyses().clone()),
+        };
+        let fresh = crate::load_str_with(&src.text, &src.path, &src.overrides, &opts)?;
+        let origin = self.origin.clone();
+        *self = fresh;
+        self.origin = origin;
+        Ok(())
     }
 }
 

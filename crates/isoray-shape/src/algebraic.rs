@@ -233,6 +233,7 @@ fn convert(
     };
     let r = match b.op(n) {
         Op::Const(v) => constant(ring, rat_from_f64(v).ok_or_else(|| format!("the constant {v}"))?),
+        Op::Input(_) => return Err("a runtime input (a parameter or the time)".to_string()),
         Op::X => var(0)?,
         Op::Y => var(1)?,
         Op::Z => var(2)?,
@@ -663,7 +664,7 @@ mod tests {
         let n = taylor_bound(&mut b, &ring, &f, p);
         let tape = b.tape(n);
         let mut e = PointEvaluator::<f64>::new(&tape);
-        pts.iter().map(|q| e.eval(q[0], q[1], q[2])).collect()
+        pts.iter().map(|q| e.eval(&[], q[0], q[1], q[2])).collect()
     }
 
     #[test]

@@ -8,8 +8,15 @@
 //!   allocates only when it is created.
 //! * [`gradient`] and [`BatchEvaluator::gradients`] give the gradient by
 //!   automatic differentiation or by finite differences ([`GradientMode`]).
+//!
+//! Every evaluation takes the runtime inputs as a slice `vars` (index
+//! [`TIME`](crate::ir::TIME) is the time, then the scene's parameters; see
+//! [`Tape::vars`]). The part of the tape that depends on inputs alone (its
+//! [`Prologue`](crate::ir::Prologue)) runs again only when one of the values
+//! it reads changed, so moving a slider costs nothing but the new points.
+//! A tape that reads no input ignores `vars` (pass `&[]`).
 
-use crate::ir::{apply_binary, apply_unary, BinOp, Instr, Tape, UnOp};
+use crate::ir::{apply_binary, apply_unary, BinOp, InputCache, Instr, Tape, UnOp};
 
 /// Number of points a [`BatchEvaluator`] processes per pass over the tape.
 pub const LANES: usize = 64;
@@ -77,7 +84,8 @@ impl Dual {
     fn scale(self, k: f64) -> [f64; 3] {
         [self.d[0] * k, self.d[1] * k, self.d[2] * k]
     }
-    fn with(v: f64, d: [f64; 3]) -> Dual {
+    /// A dual number with value `v` and derivatives `d`.
+    pub fn with(v: f64, d: [f64; 3]) -> Dual {
         Dual { v, d }
     }
 }
@@ -171,6 +179,7 @@ impl Num for Dual {
 pub struct PointEvaluator<'t, T: Num> {
     tape: &'t Tape,
     slots: Vec<T>,
+    inputs: InputCache,
 }
 
 impl<'t, T: Num> PointEvaluator<'t, T> {
@@ -180,11 +189,22 @@ impl<'t, T: Num> PointEvaluator<'t, T> {
         for &(s, v) in tape.constants() {
             slots[s as usize] = T::from_f64(v);
         }
-        PointEvaluator { tape, slots }
+        PointEvaluator {
+            tape,
+            slots,
+            inputs: InputCache::default(),
+        }
     }
 
-    /// The value at (x, y, z).
-    pub fn eval(&mut self, x: T, y: T, z: T) -> T {
+    /// The value at (x, y, z) with the inputs `vars`.
+    pub fn eval(&mut self, vars: &[f64], x: T, y: T, z: T) -> T {
+        if self.inputs.changed(self.tape, vars) {
+            let mut scratch = std::mem::take(&mut self.inputs.scratch);
+            for (slot, v) in self.tape.prologue().run(vars, &mut scratch) {
+                self.slots[slot] = T::from_f64(v);
+            }
+            self.inputs.scratch = scratch;
+        }
         let s = &mut self.slots;
         s[0] = x;
         s[1] = y;
@@ -266,20 +286,20 @@ fn step_of(mode: GradientMode) -> f64 {
     }
 }
 
-/// The gradient of the tape at one point.
-pub fn gradient(tape: &Tape, p: [f64; 3], mode: GradientMode) -> [f64; 3] {
+/// The gradient of the tape at one point, with the inputs `vars`.
+pub fn gradient(tape: &Tape, vars: &[f64], p: [f64; 3], mode: GradientMode) -> [f64; 3] {
     if mode == GradientMode::Dual {
         let mut e = PointEvaluator::<Dual>::new(tape);
         let x = Dual::with(p[0], [1.0, 0.0, 0.0]);
         let y = Dual::with(p[1], [0.0, 1.0, 0.0]);
         let z = Dual::with(p[2], [0.0, 0.0, 1.0]);
-        return e.eval(x, y, z).d;
+        return e.eval(vars, x, y, z).d;
     }
     let h = step_of(mode);
     let mut e = PointEvaluator::<f64>::new(tape);
     let mut g = [0.0; 3];
     for (o, w) in stencil(mode) {
-        let f = e.eval(p[0] + h * o[0], p[1] + h * o[1], p[2] + h * o[2]);
+        let f = e.eval(vars, p[0] + h * o[0], p[1] + h * o[1], p[2] + h * o[2]);
         for j in 0..3 {
             g[j] += w[j] * f / h;
         }
@@ -307,8 +327,11 @@ impl BatchNum for f64 {}
 pub struct BatchEvaluator<'t, T: BatchNum> {
     tape: &'t Tape,
     slots: Vec<T>,
+    inputs: InputCache,
     /// Scratch for gradient stencils.
     scratch: [Vec<T>; 4],
+    /// The dual-number evaluator for exact gradients, made on first use.
+    dual: Option<PointEvaluator<'t, Dual>>,
 }
 
 impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
@@ -321,7 +344,9 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
         BatchEvaluator {
             tape,
             slots,
+            inputs: InputCache::default(),
             scratch: Default::default(),
+            dual: None,
         }
     }
 
@@ -330,9 +355,26 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
         self.tape
     }
 
-    /// Evaluates at the points (xs[i], ys[i], zs[i]) into `out[i]`.
-    /// All four slices must have the same length (the shortest is used).
-    pub fn eval(&mut self, xs: &[T], ys: &[T], zs: &[T], out: &mut [T]) {
+    /// Runs the prologue when the inputs changed since the last call.
+    fn bind(&mut self, vars: &[f64]) {
+        if self.inputs.changed(self.tape, vars) {
+            let mut scratch = std::mem::take(&mut self.inputs.scratch);
+            for (slot, v) in self.tape.prologue().run(vars, &mut scratch) {
+                self.slots[slot * LANES..(slot + 1) * LANES].fill(T::from_f64(v));
+            }
+            self.inputs.scratch = scratch;
+        }
+    }
+
+    /// Evaluates at the points (xs[i], ys[i], zs[i]) with the inputs `vars`
+    /// into `out[i]`. All four slices must have the same length (checked in
+    /// debug builds; the shortest is used).
+    pub fn eval(&mut self, vars: &[f64], xs: &[T], ys: &[T], zs: &[T], out: &mut [T]) {
+        debug_assert!(
+            xs.len() == ys.len() && ys.len() == zs.len() && zs.len() == out.len(),
+            "slices of different lengths"
+        );
+        self.bind(vars);
         let n = xs.len().min(ys.len()).min(zs.len()).min(out.len());
         let mut i = 0;
         while i < n {
@@ -393,15 +435,15 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
                 }
             }
         }
-        let _ = len;
     }
 
     /// Gradients at the points by finite differences (or dual numbers) into
-    /// `gx, gy, gz`. `mode` chooses the stencil; for the finite-difference
-    /// modes its step is in world units.
+    /// `gx, gy, gz`, with the inputs `vars`. `mode` chooses the stencil; for
+    /// the finite-difference modes its step is in world units.
     #[allow(clippy::too_many_arguments)]
     pub fn gradients(
         &mut self,
+        vars: &[f64],
         xs: &[T],
         ys: &[T],
         zs: &[T],
@@ -418,10 +460,12 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
             .min(gy.len())
             .min(gz.len());
         if mode == GradientMode::Dual {
-            let mut e = PointEvaluator::<Dual>::new(self.tape);
+            let tape = self.tape;
+            let e = self.dual.get_or_insert_with(|| PointEvaluator::<Dual>::new(tape));
             for i in 0..n {
                 let g = e
                     .eval(
+                        vars,
                         Dual::with(xs[i].value(), [1.0, 0.0, 0.0]),
                         Dual::with(ys[i].value(), [0.0, 1.0, 0.0]),
                         Dual::with(zs[i].value(), [0.0, 0.0, 1.0]),
@@ -450,7 +494,7 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
                 sy[i] = ys[i] + oy;
                 sz[i] = zs[i] + oz;
             }
-            self.eval(sx, sy, sz, sf);
+            self.eval(vars, sx, sy, sz, sf);
             let (wx, wy, wz) = (T::from_f64(w[0]), T::from_f64(w[1]), T::from_f64(w[2]));
             for i in 0..n {
                 let f = sf[i] * inv_h;

@@ -203,14 +203,18 @@ fn trig(a: Interval, shift: f64) -> Interval {
     Interval::new(down(mn).max(-1.0), up(mx).min(1.0))
 }
 
-/// Bounds of a tape over the box x × y × z.
-pub fn eval_interval(tape: &Tape, x: Interval, y: Interval, z: Interval) -> Interval {
+/// Bounds of a tape over the box x × y × z, with the inputs `vars`.
+pub fn eval_interval(tape: &Tape, vars: &[f64], x: Interval, y: Interval, z: Interval) -> Interval {
     let mut s = vec![WHOLE; tape.slots()];
     s[0] = x;
     s[1] = y;
     s[2] = z;
     for &(k, v) in tape.constants() {
         s[k as usize] = Interval::point(v);
+    }
+    let mut scratch = Vec::new();
+    for (k, v) in tape.prologue().run(vars, &mut scratch) {
+        s[k] = Interval::point(v);
     }
     for ins in tape.instrs() {
         match *ins {
@@ -254,6 +258,7 @@ mod tests {
         let sh = compile(&Library::new(), "sphere(p, 1.0)").unwrap();
         let r = eval_interval(
             sh.tape(),
+            &[],
             Interval::new(2.0, 3.0),
             Interval::new(0.0, 0.0),
             Interval::new(0.0, 0.0),
@@ -285,7 +290,7 @@ mod tests {
                 let bx = Interval::new(c[0] - h, c[0] + h);
                 let by = Interval::new(c[1] - h, c[1] + h);
                 let bz = Interval::new(c[2] - h, c[2] + h);
-                let r = eval_interval(sh.tape(), bx, by, bz);
+                let r = eval_interval(sh.tape(), &[], bx, by, bz);
                 for _ in 0..20 {
                     let p = [
                         c[0] + (rnd() * 2.0 - 1.0) * h,

@@ -9,6 +9,10 @@
 
 use std::collections::HashMap;
 
+/// The input index of the time `t` (seconds): the first entry of every
+/// variable slice. Scene parameters follow it.
+pub const TIME: u32 = 0;
+
 /// A node of the DAG (an index into the builder).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Node(pub u32);
@@ -80,6 +84,9 @@ pub enum Op {
     Y,
     /// The z coordinate.
     Z,
+    /// A runtime input: the time ([`TIME`]) or a scene parameter, by its
+    /// index in the caller's variable slice (see [`Tape::vars`]).
+    Input(u32),
     /// A unary operation.
     Unary(UnOp, Node),
     /// A binary operation.
@@ -94,6 +101,7 @@ enum Key {
     X,
     Y,
     Z,
+    Input(u32),
     Unary(UnOp, Node),
     Binary(BinOp, Node, Node),
     Select(Node, Node, Node),
@@ -106,6 +114,7 @@ impl Op {
             Op::X => Key::X,
             Op::Y => Key::Y,
             Op::Z => Key::Z,
+            Op::Input(v) => Key::Input(v),
             Op::Unary(o, a) => Key::Unary(o, a),
             Op::Binary(o, a, b) => Key::Binary(o, a, b),
             Op::Select(c, a, b) => Key::Select(c, a, b),
@@ -228,6 +237,90 @@ impl Builder {
     /// The point's z.
     pub fn z(&mut self) -> Node {
         self.intern(Op::Z)
+    }
+    /// A runtime input (the time [`TIME`] or a parameter), read from the
+    /// variable slice an evaluator is given on each call.
+    pub fn input(&mut self, var: u32) -> Node {
+        self.intern(Op::Input(var))
+    }
+
+    /// True when `n` depends on no coordinate: it is the same at every point
+    /// (a constant, an input, or an operation on such).
+    pub fn is_uniform(&self, n: Node) -> bool {
+        let mut memo = HashMap::new();
+        self.uniform_memo(n, &mut memo)
+    }
+
+    fn uniform_memo(&self, n: Node, memo: &mut HashMap<Node, bool>) -> bool {
+        if let Some(&u) = memo.get(&n) {
+            return u;
+        }
+        let u = match self.op(n) {
+            Op::Const(_) | Op::Input(_) => true,
+            Op::X | Op::Y | Op::Z => false,
+            Op::Unary(_, a) => self.uniform_memo(a, memo),
+            Op::Binary(_, a, b) => self.uniform_memo(a, memo) && self.uniform_memo(b, memo),
+            Op::Select(c, a, b) => {
+                self.uniform_memo(c, memo) && self.uniform_memo(a, memo) && self.uniform_memo(b, memo)
+            }
+        };
+        memo.insert(n, u);
+        u
+    }
+
+    /// The inputs `n` depends on, sorted.
+    pub fn inputs_of(&self, n: Node) -> Vec<u32> {
+        let mut seen = std::collections::HashSet::new();
+        let mut stack = vec![n];
+        let mut out = Vec::new();
+        while let Some(m) = stack.pop() {
+            if !seen.insert(m) {
+                continue;
+            }
+            match self.op(m) {
+                Op::Input(v) => out.push(v),
+                Op::Unary(_, a) => stack.push(a),
+                Op::Binary(_, a, b) => stack.extend([a, b]),
+                Op::Select(c, a, b) => stack.extend([c, a, b]),
+                _ => {}
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// The value of a uniform node (see [`Builder::is_uniform`]) for the
+    /// given inputs, in f64 exactly as a tape's prologue computes it; `None`
+    /// when the node depends on a coordinate.
+    pub fn uniform_value(&self, n: Node, vars: &[f64]) -> Option<f64> {
+        let mut memo = HashMap::new();
+        self.value_memo(n, vars, &mut memo)
+    }
+
+    fn value_memo(&self, n: Node, vars: &[f64], memo: &mut HashMap<Node, Option<f64>>) -> Option<f64> {
+        if let Some(&v) = memo.get(&n) {
+            return v;
+        }
+        let v = match self.op(n) {
+            Op::Const(v) => Some(v),
+            Op::Input(k) => Some(vars.get(k as usize).copied().unwrap_or(f64::NAN)),
+            Op::X | Op::Y | Op::Z => None,
+            Op::Unary(op, a) => self.value_memo(a, vars, memo).map(|x| apply_unary(op, x)),
+            Op::Binary(op, a, b) => {
+                let x = self.value_memo(a, vars, memo)?;
+                let y = self.value_memo(b, vars, memo)?;
+                Some(apply_binary(op, x, y))
+            }
+            Op::Select(c, a, b) => {
+                let cv = self.value_memo(c, vars, memo)?;
+                let av = self.value_memo(a, vars, memo)?;
+                let bv = self.value_memo(b, vars, memo)?;
+                Some(if cv > 0.0 { av } else { bv })
+            }
+        };
+        memo.insert(n, v);
+        v
     }
 
     /// A unary operation, folded when its operand is constant.
@@ -427,7 +520,7 @@ impl Builder {
         let zero = self.constant(0.0);
         let one = self.constant(1.0);
         let d = match self.op(n) {
-            Op::Const(_) => zero,
+            Op::Const(_) | Op::Input(_) => zero,
             Op::X => {
                 if var == 0 {
                     one
@@ -573,6 +666,17 @@ impl Builder {
     }
 }
 
+/// Where `Tape::extract` places a node relative to the lazy selects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Region {
+    /// Always computed.
+    Eager,
+    /// Only in the region of the lazy select at this node.
+    Lazy(u32),
+    /// Reached by two regions: made eager.
+    Shared,
+}
+
 /// A tape instruction: an operation writing `out` from slots.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Instr {
@@ -619,14 +723,130 @@ pub enum Instr {
     },
 }
 
-/// A linear program computing one scalar from (x, y, z).
+/// The part of a tape that depends only on inputs: run once per set of
+/// input values, in f64, before the points are evaluated.
 ///
-/// Slots 0, 1 and 2 hold x, y and z; constants follow, each in its own slot;
-/// the remaining slots are reused by the instructions. No instruction writes
-/// a slot it reads, so evaluators may borrow inputs and output disjointly.
+/// A parameter or the time is the same at every point, so everything
+/// computed from inputs and constants alone is computed here, exactly as
+/// [`Builder`] would have folded it had the inputs been constants; the
+/// results then sit in slots of the main tape like constants. A tape that
+/// reads no input has an empty prologue.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Prologue {
+    /// Scratch slots the prologue needs.
+    slots: u32,
+    /// Constants in scratch slots.
+    constants: Vec<(u32, f64)>,
+    /// Inputs: (scratch slot, input index).
+    inputs: Vec<(u32, u32)>,
+    /// Instructions over the scratch slots (no [`Instr::Skip`]).
+    instrs: Vec<Instr>,
+    /// (scratch slot, main tape slot) for every value the main tape reads.
+    outputs: Vec<(u32, u32)>,
+}
+
+impl Prologue {
+    /// True when the tape reads no input.
+    pub fn is_empty(&self) -> bool {
+        self.inputs.is_empty()
+    }
+
+    /// Runs the prologue for `vars` into `scratch` (resized as needed) and
+    /// returns (main slot, value) for every value the main tape reads. An
+    /// input index beyond `vars` reads as NaN.
+    pub fn run<'s>(&'s self, vars: &[f64], scratch: &'s mut Vec<f64>) -> impl Iterator<Item = (usize, f64)> + 's {
+        scratch.clear();
+        scratch.resize(self.slots as usize, 0.0);
+        for &(k, v) in &self.constants {
+            scratch[k as usize] = v;
+        }
+        for &(k, v) in &self.inputs {
+            scratch[k as usize] = vars.get(v as usize).copied().unwrap_or(f64::NAN);
+        }
+        for ins in &self.instrs {
+            match *ins {
+                Instr::Unary { op, out, a } => scratch[out as usize] = apply_unary(op, scratch[a as usize]),
+                Instr::Binary { op, out, a, b } => {
+                    scratch[out as usize] = apply_binary(op, scratch[a as usize], scratch[b as usize])
+                }
+                Instr::Select { out, c, a, b } => {
+                    scratch[out as usize] = if scratch[c as usize] > 0.0 {
+                        scratch[a as usize]
+                    } else {
+                        scratch[b as usize]
+                    }
+                }
+                Instr::Skip { .. } => {}
+            }
+        }
+        let scratch: &'s Vec<f64> = scratch;
+        self.outputs
+            .iter()
+            .map(move |&(k, slot)| (slot as usize, scratch[k as usize]))
+    }
+
+    /// (scratch slot, input index) of every input read.
+    pub fn inputs(&self) -> &[(u32, u32)] {
+        &self.inputs
+    }
+    /// Constants in scratch slots.
+    pub fn constants(&self) -> &[(u32, f64)] {
+        &self.constants
+    }
+    /// Instructions over the scratch slots.
+    pub fn instrs(&self) -> &[Instr] {
+        &self.instrs
+    }
+    /// Scratch slots needed.
+    pub fn slots(&self) -> usize {
+        self.slots as usize
+    }
+    /// (scratch slot, main slot) pairs copied into the main tape.
+    pub fn outputs(&self) -> &[(u32, u32)] {
+        &self.outputs
+    }
+}
+
+/// Remembers the input values a prologue last ran with, so evaluators rerun
+/// it only when a value changed.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct InputCache {
+    last: Vec<u64>,
+    valid: bool,
+    pub(crate) scratch: Vec<f64>,
+}
+
+impl InputCache {
+    /// True (and remembers `vars`) when the tape's inputs differ from the last call's.
+    pub(crate) fn changed(&mut self, tape: &Tape, vars: &[f64]) -> bool {
+        if tape.prologue.is_empty() {
+            return false;
+        }
+        let bits = |v: u32| vars.get(v as usize).copied().unwrap_or(f64::NAN).to_bits();
+        if self.valid
+            && self.last.len() == tape.vars.len()
+            && tape.vars.iter().zip(&self.last).all(|(&v, &l)| bits(v) == l)
+        {
+            return false;
+        }
+        self.last.clear();
+        self.last.extend(tape.vars.iter().map(|&v| bits(v)));
+        self.valid = true;
+        true
+    }
+}
+
+/// A linear program computing one scalar from (x, y, z) and the inputs.
+///
+/// Slots 0, 1 and 2 hold x, y and z; constants follow, each in its own slot,
+/// then the values the [`Prologue`] computes from the inputs; the remaining
+/// slots are reused by the instructions. No instruction writes a slot it
+/// reads, so evaluators may borrow inputs and output disjointly.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tape {
     constants: Vec<(u32, f64)>,
+    prologue: Prologue,
+    vars: Vec<u32>,
     instrs: Vec<Instr>,
     slots: u32,
     output: u32,
@@ -643,6 +863,15 @@ impl Tape {
                 _ => Vec::new(),
             }
         };
+        // Uniform nodes depend on no coordinate: the prologue computes them.
+        let mut uniform = vec![false; n];
+        for i in 0..n {
+            uniform[i] = match ops[i] {
+                Op::Const(_) | Op::Input(_) => true,
+                Op::X | Op::Y | Op::Z => false,
+                _ => operands(i).iter().all(|m| uniform[m.0 as usize]),
+            };
+        }
         // Which nodes the output needs, and which it needs without going
         // through the `b` of a lazy select ("eager": always computed).
         let mut needed = vec![false; n];
@@ -664,11 +893,12 @@ impl Tape {
         }
         // The region of an eager lazy select: the non-eager nodes its `b`
         // reaches. A node in two regions is placed in neither (made eager).
-        let mut region_of = vec![u32::MAX; n];
-        let roots: Vec<usize> = (0..n)
-            .filter(|&i| needed[i] && eager[i] && lazy.contains(&Node(i as u32)))
-            .collect();
-        for &r in &roots {
+        let mut region_of = vec![Region::Eager; n];
+        let mut is_root = vec![false; n];
+        for i in 0..n {
+            is_root[i] = needed[i] && eager[i] && !uniform[i] && lazy.contains(&Node(i as u32));
+        }
+        for r in (0..n).filter(|&i| is_root[i]) {
             let Op::Select(_, _, b) = ops[r] else { continue };
             let mut stack = vec![b.0 as usize];
             let mut seen = std::collections::HashSet::new();
@@ -676,21 +906,20 @@ impl Tape {
                 if eager[m] || !seen.insert(m) {
                     continue;
                 }
-                region_of[m] = if region_of[m] == u32::MAX {
-                    r as u32
-                } else {
-                    u32::MAX - 1
+                region_of[m] = match region_of[m] {
+                    Region::Eager => Region::Lazy(r as u32),
+                    _ => Region::Shared,
                 };
                 stack.extend(operands(m).iter().map(|x| x.0 as usize));
             }
         }
         // Nodes shared by two regions become eager, with everything they use.
         for i in (0..n).rev() {
-            if region_of[i] == u32::MAX - 1 {
+            if region_of[i] == Region::Shared {
                 eager[i] = true;
             }
             if eager[i] && needed[i] {
-                region_of[i] = u32::MAX;
+                region_of[i] = Region::Eager;
                 let is_lazy = lazy.contains(&Node(i as u32));
                 for (k, m) in operands(i).into_iter().enumerate() {
                     if is_lazy && k == 2 {
@@ -698,7 +927,7 @@ impl Tape {
                     }
                     if !eager[m.0 as usize] {
                         eager[m.0 as usize] = true;
-                        region_of[m.0 as usize] = u32::MAX;
+                        region_of[m.0 as usize] = Region::Eager;
                     }
                 }
             }
@@ -709,8 +938,8 @@ impl Tape {
         let members: Vec<Vec<usize>> = {
             let mut m = vec![Vec::new(); n];
             for i in 0..n {
-                if needed[i] && !eager[i] && region_of[i] < u32::MAX - 1 {
-                    m[region_of[i] as usize].push(i);
+                if let (true, false, false, Region::Lazy(r)) = (needed[i], eager[i], uniform[i], region_of[i]) {
+                    m[r as usize].push(i);
                 }
             }
             m
@@ -719,7 +948,7 @@ impl Tape {
             if !needed[i] || !eager[i] {
                 continue;
             }
-            if roots.contains(&i) && !members[i].is_empty() {
+            if is_root[i] && !members[i].is_empty() {
                 skip_before.push((order.len(), i));
                 order.extend(&members[i]);
             }
@@ -734,6 +963,19 @@ impl Tape {
         }
         last_use[output.0 as usize] = usize::MAX;
 
+        // A temporary is a per-point operation: it gets a reusable slot.
+        let is_temp = |m: usize| !uniform[m] && matches!(ops[m], Op::Unary(..) | Op::Binary(..) | Op::Select(..));
+        // Uniform values the per-point part reads (or the output itself).
+        let mut read_by_points = vec![false; n];
+        read_by_points[output.0 as usize] = true;
+        for i in 0..n {
+            if needed[i] && !uniform[i] {
+                for m in operands(i) {
+                    read_by_points[m.0 as usize] = true;
+                }
+            }
+        }
+
         let mut slot_of = vec![u32::MAX; n];
         let mut constants = Vec::new();
         let mut next_slot = 3u32;
@@ -745,7 +987,7 @@ impl Tape {
                 Op::X => slot_of[i] = 0,
                 Op::Y => slot_of[i] = 1,
                 Op::Z => slot_of[i] = 2,
-                Op::Const(v) => {
+                Op::Const(v) if read_by_points[i] => {
                     slot_of[i] = next_slot;
                     constants.push((next_slot, v));
                     next_slot += 1;
@@ -753,10 +995,69 @@ impl Tape {
                 _ => {}
             }
         }
+        // The prologue: every needed uniform node but the constants only the
+        // per-point part reads gets a scratch slot, in index order.
+        let mut prologue = Prologue::default();
+        let mut scratch_of = vec![u32::MAX; n];
+        let feeds_prologue = {
+            let mut f = vec![false; n];
+            for i in 0..n {
+                if needed[i] && uniform[i] && !matches!(ops[i], Op::Const(_)) {
+                    f[i] = true;
+                }
+            }
+            f
+        };
+        let mut read_by_prologue = vec![false; n];
+        for j in (0..n).filter(|&j| feeds_prologue[j]) {
+            for m in operands(j) {
+                read_by_prologue[m.0 as usize] = true;
+            }
+        }
+        let mut vars = Vec::new();
+        for i in 0..n {
+            if !needed[i] || !uniform[i] {
+                continue;
+            }
+            if !feeds_prologue[i] && !read_by_prologue[i] {
+                continue;
+            }
+            let k = prologue.slots;
+            prologue.slots += 1;
+            scratch_of[i] = k;
+            let s = |m: Node| scratch_of[m.0 as usize];
+            match ops[i] {
+                Op::Const(v) => prologue.constants.push((k, v)),
+                Op::Input(v) => {
+                    prologue.inputs.push((k, v));
+                    vars.push(v);
+                }
+                Op::Unary(op, a) => prologue.instrs.push(Instr::Unary { op, out: k, a: s(a) }),
+                Op::Binary(op, a, b) => prologue.instrs.push(Instr::Binary {
+                    op,
+                    out: k,
+                    a: s(a),
+                    b: s(b),
+                }),
+                Op::Select(c, a, b) => prologue.instrs.push(Instr::Select {
+                    out: k,
+                    c: s(c),
+                    a: s(a),
+                    b: s(b),
+                }),
+                Op::X | Op::Y | Op::Z => unreachable!("coordinates are not uniform"),
+            }
+            if feeds_prologue[i] && read_by_points[i] {
+                slot_of[i] = next_slot;
+                prologue.outputs.push((k, next_slot));
+                next_slot += 1;
+            }
+        }
+        vars.sort_unstable();
+        vars.dedup();
+
         let mut free: Vec<u32> = Vec::new();
         let mut instrs = Vec::new();
-        let is_temp =
-            |ops: &[Op], m: Node| matches!(ops[m.0 as usize], Op::Unary(..) | Op::Binary(..) | Op::Select(..));
         let mut skips = skip_before.iter().peekable();
         let mut pending: Vec<(usize, usize)> = Vec::new(); // (instr index of a skip, region root)
         for (pos, &i) in order.iter().enumerate() {
@@ -771,7 +1072,7 @@ impl Tape {
                     });
                 }
             }
-            if !is_temp(ops, Node(i as u32)) {
+            if !is_temp(i) {
                 continue;
             }
             if let Some(k) = pending.iter().position(|&(_, root)| root == i) {
@@ -811,7 +1112,7 @@ impl Tape {
             ops_i.sort();
             ops_i.dedup();
             for m in ops_i {
-                if last_use[m.0 as usize] == pos && is_temp(ops, m) {
+                if last_use[m.0 as usize] == pos && is_temp(m.0 as usize) {
                     free.push(slot_of[m.0 as usize]);
                 }
             }
@@ -819,6 +1120,8 @@ impl Tape {
         let output_slot = slot_of[output.0 as usize];
         Tape {
             constants,
+            prologue,
+            vars,
             instrs,
             slots: next_slot,
             output: output_slot,
@@ -828,6 +1131,36 @@ impl Tape {
     /// Constants and the slots they live in.
     pub fn constants(&self) -> &[(u32, f64)] {
         &self.constants
+    }
+    /// The part computed from inputs alone, once per set of input values.
+    pub fn prologue(&self) -> &Prologue {
+        &self.prologue
+    }
+    /// The inputs the tape reads (sorted indices into the variable slice);
+    /// empty for a tape of the coordinates alone.
+    pub fn vars(&self) -> &[u32] {
+        &self.vars
+    }
+    /// This tape with its inputs fixed at `vars`: the prologue's values
+    /// become constants, so the result reads no input and computes exactly
+    /// what this tape computes with `vars`. For consumers that take a
+    /// whole shape at one moment (the mesher, exports).
+    pub fn bind(&self, vars: &[f64]) -> Tape {
+        let mut t = self.clone();
+        if self.prologue.is_empty() {
+            return t;
+        }
+        let mut scratch = Vec::new();
+        t.constants
+            .extend(self.prologue.run(vars, &mut scratch).map(|(k, v)| (k as u32, v)));
+        t.prologue = Prologue::default();
+        t.vars.clear();
+        t
+    }
+
+    /// True when the tape reads input `var`.
+    pub fn reads(&self, var: u32) -> bool {
+        self.vars.binary_search(&var).is_ok()
     }
     /// Instructions in evaluation order.
     pub fn instrs(&self) -> &[Instr] {
@@ -847,7 +1180,8 @@ impl Tape {
         self.instrs.len()
     }
 
-    /// True when the result is a constant or a coordinate.
+    /// True when the per-point part is empty: the result is a constant, a
+    /// coordinate or a value of the inputs alone.
     pub fn is_empty(&self) -> bool {
         self.instrs.is_empty()
     }
@@ -911,10 +1245,10 @@ mod tests {
                 pts.iter().map(|p| p[2]).collect(),
             );
             let mut out = vec![0.0; pts.len()];
-            bl.eval(&xs, &ys, &zs, &mut out);
+            bl.eval(&[], &xs, &ys, &zs, &mut out);
             for (k, p) in pts.iter().enumerate() {
-                let want = pe.eval(p[0], p[1], p[2]);
-                assert_eq!(pl.eval(p[0], p[1], p[2]), want, "point {p:?}");
+                let want = pe.eval(&[], p[0], p[1], p[2]);
+                assert_eq!(pl.eval(&[], p[0], p[1], p[2]), want, "point {p:?}");
                 assert_eq!(out[k], want, "batch {p:?}");
             }
         }
@@ -958,6 +1292,7 @@ mod tests {
                 let p = [t.sin() * 1.7, (t * 1.3).cos() * 1.2, (t * 0.7).sin() * 1.5];
                 let d = dual
                     .eval(
+                        &[],
                         Dual {
                             v: p[0],
                             d: [1.0, 0.0, 0.0],
@@ -973,7 +1308,7 @@ mod tests {
                     )
                     .d;
                 for v in 0..3 {
-                    let s = PointEvaluator::<f64>::new(&tapes[v]).eval(p[0], p[1], p[2]);
+                    let s = PointEvaluator::<f64>::new(&tapes[v]).eval(&[], p[0], p[1], p[2]);
                     assert!(
                         (s - d[v]).abs() <= 1e-9 * (1.0 + d[v].abs()),
                         "{src} d/dx{v} at {p:?}: symbolic {s}, dual {}",
@@ -1011,5 +1346,111 @@ mod tests {
                 Instr::Skip { .. } => {}
             }
         }
+    }
+
+    /// Builds sphere(p - (k, 0, 0), r·2) + sin(t) with k, r inputs, or with
+    /// the same values as constants.
+    fn moving_sphere(inputs: Option<[f64; 3]>) -> Tape {
+        let mut b = Builder::new();
+        let (x, y, z) = (b.x(), b.y(), b.z());
+        let (t, k, r) = match inputs {
+            None => (b.input(TIME), b.input(1), b.input(2)),
+            Some([t, k, r]) => (b.constant(t), b.constant(k), b.constant(r)),
+        };
+        let dx = b.sub(x, k);
+        let x2 = b.square(dx);
+        let y2 = b.square(y);
+        let z2 = b.square(z);
+        let s = b.add(x2, y2);
+        let s = b.add(s, z2);
+        let len = b.sqrt(s);
+        let r2 = b.mul_c(r, 2.0);
+        let d = b.sub(len, r2);
+        let st = b.unary(UnOp::Sin, t);
+        let w = b.mul_c(st, 0.25);
+        let out = b.add(d, w);
+        b.tape(out)
+    }
+
+    #[test]
+    fn inputs_match_folded_constants_bit_for_bit() {
+        let live = moving_sphere(None);
+        assert_eq!(live.vars(), &[0, 1, 2]);
+        assert!(live.reads(TIME) && !live.reads(3));
+        // Everything computed from inputs alone is in the prologue.
+        assert_eq!(live.prologue().instrs().len(), 3, "{:?}", live.prologue());
+        let mut pe = crate::eval::PointEvaluator::<f64>::new(&live);
+        let mut pf = crate::eval::PointEvaluator::<f32>::new(&live);
+        let mut be = crate::eval::BatchEvaluator::<f32>::new(&live);
+        let pts: Vec<[f64; 3]> = (0..100)
+            .map(|i| {
+                let a = i as f64 * 0.37;
+                [a.sin() * 3.0, a.cos() * 2.0, (a * 0.7).sin()]
+            })
+            .collect();
+        let xs: Vec<f32> = pts.iter().map(|p| p[0] as f32).collect();
+        let ys: Vec<f32> = pts.iter().map(|p| p[1] as f32).collect();
+        let zs: Vec<f32> = pts.iter().map(|p| p[2] as f32).collect();
+        let mut out = vec![0.0f32; pts.len()];
+        // Several input values in turn, and back: the prologue reruns each time.
+        for vars in [[0.0, 0.5, 1.0], [1.3, -2.0, 0.25], [0.0, 0.5, 1.0], [7.0, 1e-3, 3.0]] {
+            let folded = moving_sphere(Some(vars));
+            assert!(folded.vars().is_empty() && folded.prologue().is_empty());
+            let mut fe = crate::eval::PointEvaluator::<f64>::new(&folded);
+            let mut ff = crate::eval::PointEvaluator::<f32>::new(&folded);
+            let mut fb = crate::eval::BatchEvaluator::<f32>::new(&folded);
+            let mut want32 = vec![0.0f32; pts.len()];
+            fb.eval(&[], &xs, &ys, &zs, &mut want32);
+            be.eval(&vars, &xs, &ys, &zs, &mut out);
+            let bound = live.bind(&vars);
+            assert!(bound.vars().is_empty());
+            let mut bb = crate::eval::PointEvaluator::<f64>::new(&bound);
+            for (k, p) in pts.iter().enumerate() {
+                let want = fe.eval(&[], p[0], p[1], p[2]);
+                assert_eq!(pe.eval(&vars, p[0], p[1], p[2]).to_bits(), want.to_bits());
+                assert_eq!(bb.eval(&[], p[0], p[1], p[2]).to_bits(), want.to_bits());
+                let (x, y, z) = (xs[k], ys[k], zs[k]);
+                assert_eq!(pf.eval(&vars, x, y, z).to_bits(), ff.eval(&[], x, y, z).to_bits());
+                assert_eq!(out[k].to_bits(), want32[k].to_bits(), "batch at {p:?}");
+            }
+        }
+        // A missing input reads as NaN: a visible failure, never a plausible value.
+        assert!(pe.eval(&[0.0], 0.0, 0.0, 0.0).is_nan());
+    }
+
+    #[test]
+    fn uniform_values_and_their_inputs() {
+        let mut b = Builder::new();
+        let (x, k) = (b.x(), b.input(3));
+        let two_k = b.mul_c(k, 2.0);
+        let sum = b.add(two_k, x);
+        assert!(b.is_uniform(two_k) && !b.is_uniform(sum));
+        assert_eq!(b.uniform_value(two_k, &[0.0, 0.0, 0.0, 1.5]), Some(3.0));
+        assert_eq!(b.uniform_value(sum, &[0.0; 4]), None);
+        assert_eq!(b.inputs_of(sum), vec![3]);
+        // The derivative of an input is zero.
+        let d = b.derivative(two_k, 0);
+        assert_eq!(b.uniform_value(d, &[0.0, 0.0, 0.0, 1.5]), Some(0.0));
+    }
+
+    #[test]
+    fn a_uniform_lazy_select_and_output_need_no_skip() {
+        let mut b = Builder::new();
+        let (x, k) = (b.x(), b.input(1));
+        let kk = b.mul_c(k, 3.0);
+        let sel = b.lazy_select(k, kk, k);
+        let t = b.tape(sel);
+        assert!(t.is_empty(), "a value of the inputs alone has no per-point part");
+        assert_eq!(
+            crate::eval::PointEvaluator::<f64>::new(&t).eval(&[0.0, 2.0], 0.0, 0.0, 0.0),
+            6.0
+        );
+        let out = b.add(sel, x);
+        let t = b.tape(out);
+        assert!(!t.instrs().iter().any(|i| matches!(i, Instr::Skip { .. })));
+        assert_eq!(
+            crate::eval::PointEvaluator::<f64>::new(&t).eval(&[0.0, -2.0], 1.0, 0.0, 0.0),
+            -1.0
+        );
     }
 }

@@ -30,8 +30,8 @@ pub mod types;
 
 pub use diag::{Diagnostic, SourceId, Span};
 pub use eval::{gradient, BatchEvaluator, Dual, GradientMode, PointEvaluator, LANES};
-pub use ir::{Builder, Node, Tape};
-pub use lower::{Library, Surface, SurfaceMode, GRADIENT_GUARD};
+pub use ir::{Builder, Node, Tape, TIME};
+pub use lower::{Analyses, Compiled, Library, Surface, SurfaceMode, GRADIENT_GUARD};
 pub use types::{Type, Value};
 
 /// A compiled shape: the tape of one signed distance function.
@@ -49,13 +49,27 @@ impl Shape {
     pub fn tape(&self) -> &Tape {
         &self.tape
     }
-    /// The signed distance at one point, in f64.
+    /// The signed distance at one point, in f64, for a shape that reads no
+    /// input (an input it does read is NaN: use [`Shape::eval_with`]).
     pub fn eval(&self, p: [f64; 3]) -> f64 {
-        PointEvaluator::<f64>::new(&self.tape).eval(p[0], p[1], p[2])
+        self.eval_with(&[], p)
     }
-    /// The gradient at one point.
+    /// The signed distance at one point with the inputs `vars` (the time,
+    /// then the parameters: see [`Library::input_values`]).
+    pub fn eval_with(&self, vars: &[f64], p: [f64; 3]) -> f64 {
+        PointEvaluator::<f64>::new(&self.tape).eval(vars, p[0], p[1], p[2])
+    }
+    /// The gradient at one point, for a shape that reads no input.
     pub fn gradient(&self, p: [f64; 3], mode: GradientMode) -> [f64; 3] {
-        gradient(&self.tape, p, mode)
+        gradient(&self.tape, &[], p, mode)
+    }
+    /// The gradient at one point with the inputs `vars`.
+    pub fn gradient_with(&self, vars: &[f64], p: [f64; 3], mode: GradientMode) -> [f64; 3] {
+        gradient(&self.tape, vars, p, mode)
+    }
+    /// True when the shape reads the time or a parameter.
+    pub fn reads_inputs(&self) -> bool {
+        !self.tape.vars().is_empty()
     }
 }
 

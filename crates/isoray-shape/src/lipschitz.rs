@@ -26,6 +26,7 @@ pub fn import(src: &Builder, n: Node, dst: &mut Builder, p: [Node; 3], memo: &mu
     }
     let out = match src.op(n) {
         Op::Const(v) => dst.constant(v),
+        Op::Input(v) => dst.input(v),
         Op::X => p[0],
         Op::Y => p[1],
         Op::Z => p[2],
@@ -150,6 +151,10 @@ impl IntervalWriter<'_> {
         }
         let out = match self.src.op(n) {
             Op::Const(v) => Self::point(b, v),
+            Op::Input(v) => {
+                let n = b.input(v);
+                Iv { lo: n, hi: n }
+            }
             Op::X => self.bx[0],
             Op::Y => self.bx[1],
             Op::Z => self.bx[2],
@@ -413,7 +418,7 @@ mod tests {
             let x = -2.0 + 0.02 * i as f64;
             let z = 0.3 * x + 0.1;
             for y in [3.0, 1.5, 0.8, 0.6, -0.7, -2.0] {
-                let d = e.eval(x, y, z);
+                let d = e.eval(&[], x, y, z);
                 assert_eq!(d.signum(), y.signum());
                 // Brute force: no zero within |d| of the point along a few directions.
                 for k in 0..16 {
@@ -430,7 +435,7 @@ mod tests {
             }
         }
         // Far from the surface the step is a good fraction of the distance.
-        assert!(e.eval(0.0, 3.0, 0.0) > 0.5);
+        assert!(e.eval(&[], 0.0, 3.0, 0.0) > 0.5);
     }
 
     #[test]
@@ -439,10 +444,10 @@ mod tests {
         // first-order radius is huge there, the second radius is not.
         let tape = bound("x^2 + y^2 + z^2 - 1");
         let mut e = PointEvaluator::<f64>::new(&tape);
-        let d = e.eval(0.0, 0.0, 0.0);
+        let d = e.eval(&[], 0.0, 0.0, 0.0);
         assert!((-1.0..=-0.2).contains(&d), "{d}");
         for r in [0.5, 0.9, 1.1, 2.0, 5.0] {
-            let d = e.eval(r, 0.0, 0.0);
+            let d = e.eval(&[], r, 0.0, 0.0);
             assert!(
                 d.abs() <= (r - 1.0f64).abs() + 1e-12 && d.signum() == (r - 1.0f64).signum(),
                 "{r}: {d}"
@@ -456,7 +461,7 @@ mod tests {
         let tape = bound("sin(x) + 0.0 * y - 2.0");
         let mut e = PointEvaluator::<f64>::new(&tape);
         for i in 0..100 {
-            let v = e.eval(i as f64 * 0.3, 0.0, 0.0);
+            let v = e.eval(&[], i as f64 * 0.3, 0.0, 0.0);
             assert!(v < 0.0 && v.is_finite(), "{v}");
         }
     }

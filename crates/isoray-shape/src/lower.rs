@@ -56,19 +56,44 @@ pub enum SurfaceMode {
 /// Where |∇f| is below this, the implicit distance estimate divides by it instead.
 pub const GRADIENT_GUARD: f64 = 1e-9;
 
-/// Analyses keyed by surface name and the bits of its parameter values.
-type AnalysisCache = Arc<Mutex<HashMap<(String, Vec<u64>), Arc<Analysis>>>>;
+/// Analyses keyed by the content of a surface (its definition and those of
+/// the surfaces it calls) and the bits of the values it bound.
+type AnalysisMap = HashMap<(String, Vec<u64>), Arc<Analysis>>;
+
+/// A shared cache of surface analyses (implicit equations, bounds,
+/// implicitizations), keyed by content and bound values, never by name: a
+/// library compiled again with it derives only what changed.
+#[derive(Debug, Clone, Default)]
+pub struct Analyses(Arc<Mutex<AnalysisMap>>);
+
+impl Analyses {
+    /// Number of cached analyses.
+    pub fn len(&self) -> usize {
+        self.0.lock().map(|m| m.len()).unwrap_or(0)
+    }
+    /// True when nothing is cached.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
 
 /// Everything shape text may refer to besides `p`: the scene's named
 /// parameters and its user primitives.
+///
+/// The parameters are runtime inputs: shape text that names one reads it
+/// from the variable slice at evaluation time (see [`Library::input_names`]
+/// for the layout), so changing a value never recompiles. The time `t` is
+/// input [`TIME`](crate::ir::TIME).
 #[derive(Debug, Clone, Default)]
 pub struct Library {
     params: Vec<(String, Value)>,
+    /// The time the exact analyses bind (seconds).
+    time: f64,
     surfaces: HashMap<String, Surface>,
     order: Vec<String>,
     /// Analyses of implicit and parametric surfaces, per surface and
     /// parameter values: each equation is derived (and implicitized) once.
-    analyses: AnalysisCache,
+    analyses: Analyses,
 }
 
 impl Library {
@@ -89,6 +114,71 @@ impl Library {
     /// The named parameters.
     pub fn params(&self) -> &[(String, Value)] {
         &self.params
+    }
+
+    /// Uses `cache` for the analyses of surfaces (shared with other libraries).
+    pub fn use_analyses(&mut self, cache: Analyses) {
+        self.analyses = cache;
+    }
+
+    /// The analysis cache (clone it to share it).
+    pub fn analyses(&self) -> &Analyses {
+        &self.analyses
+    }
+
+    /// Sets the time that exact analyses bind when a surface's parameters
+    /// depend on `t` (shape text reads the time as an input).
+    pub fn set_time(&mut self, t: f64) {
+        self.time = t;
+    }
+
+    /// The time exact analyses bind.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The first input index of parameter `name` and its type: its
+    /// components are that index and the ones after it.
+    pub fn param_input(&self, name: &str) -> Option<(u32, Type)> {
+        let mut at = 1u32;
+        for (n, v) in &self.params {
+            if n == name {
+                return Some((at, v.ty()));
+            }
+            at += v.ty().width() as u32;
+        }
+        None
+    }
+
+    /// Number of inputs: the time and every parameter component.
+    pub fn input_count(&self) -> usize {
+        1 + self.params.iter().map(|(_, v)| v.ty().width()).sum::<usize>()
+    }
+
+    /// The names of the inputs in slice order: `t`, then each parameter
+    /// (`NAME` for a number, `NAME.x`, `NAME.y`, `NAME.z` for a vector).
+    pub fn input_names(&self) -> Vec<String> {
+        let mut out = vec!["t".to_string()];
+        for (n, v) in &self.params {
+            match v.ty() {
+                Type::Float => out.push(n.clone()),
+                ty => out.extend(["x", "y", "z"][..ty.width()].iter().map(|c| format!("{n}.{c}"))),
+            }
+        }
+        out
+    }
+
+    /// The current inputs: the time, then the parameter values.
+    pub fn input_values(&self) -> Vec<f64> {
+        let mut out = vec![self.time];
+        for (_, v) in &self.params {
+            match *v {
+                Value::Float(x) => out.push(x),
+                Value::Vec2(a) => out.extend(a),
+                Value::Vec3(a) => out.extend(a),
+            }
+        }
+        out
     }
 
     /// Parses and adds a user primitive. `source` identifies `text` in
@@ -169,25 +259,76 @@ impl Library {
     /// What isoray derives for a surface (its equation, the bound it traces,
     /// timings) with the given constant parameters; computed once and cached.
     pub fn analysis(&self, s: &Surface, params: &[Value]) -> Result<Arc<Analysis>, Diagnostic> {
-        let key = (
-            s.name.clone(),
-            params
+        let (content, inputs) = self.content_of(s);
+        let vars = self.input_values();
+        let mut bits: Vec<u64> = params
+            .iter()
+            .flat_map(|v| match v {
+                Value::Float(x) => vec![x.to_bits()],
+                Value::Vec2(a) => a.iter().map(|x| x.to_bits()).collect(),
+                Value::Vec3(a) => a.iter().map(|x| x.to_bits()).collect(),
+            })
+            .collect();
+        bits.extend(
+            inputs
                 .iter()
-                .flat_map(|v| match v {
-                    Value::Float(x) => vec![x.to_bits()],
-                    Value::Vec2(a) => a.iter().map(|x| x.to_bits()).collect(),
-                    Value::Vec3(a) => a.iter().map(|x| x.to_bits()).collect(),
-                })
-                .collect::<Vec<u64>>(),
+                .map(|&k| vars.get(k as usize).copied().unwrap_or(f64::NAN).to_bits()),
         );
-        if let Some(a) = self.analyses.lock().ok().and_then(|m| m.get(&key).cloned()) {
+        let key = (content, bits);
+        if let Some(a) = self.analyses.0.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return Ok(a);
         }
         let a = Arc::new(analyze(self, s, params)?);
-        if let Ok(mut m) = self.analyses.lock() {
+        if let Ok(mut m) = self.analyses.0.lock() {
             m.insert(key, a.clone());
         }
         Ok(a)
+    }
+
+    /// A key for the content of surface `s`: its definition and those of the
+    /// user surfaces it calls, directly or not; and the inputs (scene
+    /// parameters, the time) those bodies read directly, which exact algebra
+    /// binds at their current values.
+    fn content_of(&self, s: &Surface) -> (String, Vec<u32>) {
+        let mut todo = vec![s];
+        let mut seen: Vec<&str> = Vec::new();
+        let mut key = String::new();
+        let mut inputs = Vec::new();
+        while let Some(x) = todo.pop() {
+            if seen.contains(&x.name.as_str()) {
+                continue;
+            }
+            seen.push(&x.name);
+            key.push_str(&format!(
+                "{}|{:?}|{:?}|{:?}|{:?}|{:?};",
+                x.name, x.params, x.mode, x.options, x.program, x.parametric
+            ));
+            let mut programs = vec![&x.program];
+            if let Some(def) = &x.parametric {
+                programs.extend(def.coords.iter());
+            }
+            let own: Vec<&str> = x.params.iter().map(|(n, _)| n.as_str()).collect();
+            for prog in programs {
+                for name in prog.names_used() {
+                    if own.contains(&name.as_str()) {
+                        continue;
+                    }
+                    if let Some((at, ty)) = self.param_input(&name) {
+                        inputs.extend(at..at + ty.width() as u32);
+                    } else if name == "t" && x.mode != SurfaceMode::Parametric {
+                        inputs.push(crate::ir::TIME);
+                    }
+                }
+                for f in prog.functions_called() {
+                    if let Some(c) = self.surfaces.get(&f) {
+                        todo.push(c);
+                    }
+                }
+            }
+        }
+        inputs.sort_unstable();
+        inputs.dedup();
+        (key, inputs)
     }
 
     /// The analysis of a surface with its default parameters.
@@ -200,7 +341,7 @@ impl Library {
     /// Lowers a surface's raw body (the equation f for implicit surfaces,
     /// the distance for SDFs) at the point X, Y, Z of `b` with constant parameters.
     pub(crate) fn lower_raw(&self, b: &mut Builder, s: &Surface, params: &[Value]) -> Result<Node, Diagnostic> {
-        let mut l = Lowerer::new(b, self, s.source);
+        let mut l = Lowerer::binding(b, self, s.source);
         let p = l.point();
         let args: Vec<Val> = params.iter().map(|v| v.lower(l.b)).collect();
         Ok(l.lower_body(s, p, &args)?.s())
@@ -211,7 +352,7 @@ impl Library {
         let def = s.parametric.as_ref().expect("a parametric surface");
         let mut out = [Node(0); 3];
         for (i, prog) in def.coords.iter().enumerate() {
-            let mut l = Lowerer::new(b, self, def.sources[i]);
+            let mut l = Lowerer::binding(b, self, def.sources[i]);
             let (sv, tv) = (l.b.x(), l.b.y());
             l.scope.push(("s".to_string(), Val::float(sv)));
             l.scope.push(("t".to_string(), Val::float(tv)));
@@ -353,6 +494,17 @@ impl Library {
 
     /// Compiles an already parsed program.
     pub fn compile_program(&self, b: &mut Builder, program: &Program, source: SourceId) -> Result<Node, Diagnostic> {
+        self.compile_tracked(b, program, source).map(|c| c.node)
+    }
+
+    /// Compiles a parsed program and reports which inputs its exact analyses
+    /// bound as constants (the object must be compiled again when they change).
+    pub fn compile_tracked(
+        &self,
+        b: &mut Builder,
+        program: &Program,
+        source: SourceId,
+    ) -> Result<Compiled, Diagnostic> {
         let mut l = Lowerer::new(b, self, source);
         let p = l.point();
         l.scope.push(("p".to_string(), p));
@@ -366,8 +518,21 @@ impl Library {
             .with_label(format!("this is a {}", v.ty))
             .with_note("call a primitive such as `sphere(p, 1.0)`, or take a component such as `.x`"));
         }
-        Ok(v.s())
+        Ok(Compiled {
+            node: v.s(),
+            bound: l.bound,
+        })
     }
+}
+
+/// A compiled program: its node, and the inputs it bound as constants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Compiled {
+    /// The signed distance.
+    pub node: Node,
+    /// Inputs whose values an exact analysis (implicit or parametric
+    /// surface) bound at compile time, sorted; empty when every input stays live.
+    pub bound: Vec<u32>,
 }
 
 /// Lowers one snippet; holds the scope and the call stack of user primitives.
@@ -378,6 +543,10 @@ pub(crate) struct Lowerer<'a> {
     scope: Vec<(String, Val)>,
     calls: Vec<String>,
     depth: usize,
+    /// Inputs whose current values exact algebra bound as constants.
+    bound: Vec<u32>,
+    /// When set, inputs lower as these constant values (for exact algebra).
+    bind: Option<Vec<f64>>,
 }
 
 /// A lowered argument and where it was written.
@@ -401,6 +570,26 @@ impl<'a> Lowerer<'a> {
             scope: Vec::new(),
             calls: Vec::new(),
             depth: 0,
+            bound: Vec::new(),
+            bind: None,
+        }
+    }
+
+    /// A lowerer that binds every input at the library's current values.
+    fn binding(b: &'a mut Builder, lib: &'a Library, source: SourceId) -> Self {
+        let mut l = Lowerer::new(b, lib, source);
+        l.bind = Some(lib.input_values());
+        l
+    }
+
+    /// Input `var`, or its bound value.
+    fn input(&mut self, var: u32) -> Node {
+        match &self.bind {
+            Some(vals) => {
+                let v = vals.get(var as usize).copied().unwrap_or(f64::NAN);
+                self.b.constant(v)
+            }
+            None => self.b.input(var),
         }
     }
 
@@ -463,14 +652,19 @@ impl<'a> Lowerer<'a> {
                 if let Some(v) = self.lookup(name) {
                     return Ok(v);
                 }
-                if let Some((_, v)) = self.lib.params.iter().find(|(n, _)| n == name) {
-                    return Ok(v.lower(self.b));
+                if let Some((at, ty)) = self.lib.param_input(name) {
+                    let cs: Vec<Node> = (0..ty.width() as u32).map(|k| self.input(at + k)).collect();
+                    return Ok(Val::from_slice(&cs).expect("1..=3 components"));
+                }
+                if name == "t" {
+                    return Ok(Val::float(self.input(crate::ir::TIME)));
                 }
                 if let Some(c) = library::constant(name) {
                     return Ok(Val::float(self.b.constant(c)));
                 }
                 let mut known: Vec<&str> = self.scope.iter().map(|(n, _)| n.as_str()).collect();
                 known.extend(self.lib.params.iter().map(|(n, _)| n.as_str()));
+                known.push("t");
                 let mut d = self
                     .err(e.span, format!("unknown name `{name}`"))
                     .with_label("not a variable, parameter or binding in scope");
@@ -732,12 +926,25 @@ impl<'a> Lowerer<'a> {
         Ok(v)
     }
 
-    /// The parameter values, when every one is a constant.
-    fn const_values(&self, params: &[Val]) -> Option<Vec<Value>> {
-        params
+    /// The parameter values, when every one is a constant or a value of the
+    /// inputs alone (then bound at the library's current values, and the
+    /// inputs it read recorded in `bound`).
+    fn const_values(&mut self, params: &[Val]) -> Option<Vec<Value>> {
+        let vars = self.lib.input_values();
+        let mut read = Vec::new();
+        let r: Option<Vec<Value>> = params
             .iter()
             .map(|v| {
-                let c: Option<Vec<f64>> = (0..v.ty.width()).map(|i| self.b.const_value(v.c[i])).collect();
+                let c: Option<Vec<f64>> = (0..v.ty.width())
+                    .map(|i| {
+                        let n = v.c[i];
+                        self.b.const_value(n).or_else(|| {
+                            let x = self.b.uniform_value(n, &vars)?;
+                            read.extend(self.b.inputs_of(n));
+                            Some(x)
+                        })
+                    })
+                    .collect();
                 let c = c?;
                 Some(match c.len() {
                     1 => Value::Float(c[0]),
@@ -745,7 +952,24 @@ impl<'a> Lowerer<'a> {
                     _ => Value::Vec3([c[0], c[1], c[2]]),
                 })
             })
-            .collect()
+            .collect();
+        if r.is_some() {
+            self.bound.extend(read);
+            self.bound.sort_unstable();
+            self.bound.dedup();
+        }
+        r
+    }
+
+    /// Records the inputs an analysis of `s` bound (those its bodies read directly).
+    fn note_bound(&mut self, s: &Surface) {
+        if self.bind.is_some() {
+            return;
+        }
+        let (_, inputs) = self.lib.content_of(s);
+        self.bound.extend(inputs);
+        self.bound.sort_unstable();
+        self.bound.dedup();
     }
 
     /// Divides a bound by the surface's Lipschitz safety factor.
@@ -774,10 +998,11 @@ impl<'a> Lowerer<'a> {
         let Some(vals) = self.const_values(params) else {
             return Err(self
                 .err(span, format!("surface `{}` needs constant parameters here", s.name))
-                .with_label("a parameter is not a constant")
-                .with_note("its distance bound is derived once per set of parameter values; or set bound = \"first-order\" on the surface"));
+                .with_label("a parameter depends on the point")
+                .with_note("its distance bound is derived once per set of parameter values, so they may use constants, scene parameters and `t` but not `p`; or set bound = \"first-order\" on the surface"));
         };
         let a = self.lib.analysis(s, &vals)?;
+        self.note_bound(s);
         let pc = [p.c[0], p.c[1], p.c[2]];
         let taylor = a
             .equation
@@ -811,10 +1036,11 @@ impl<'a> Lowerer<'a> {
                     span,
                     format!("the parameters of parametric surface `{}` must be constants", s.name),
                 )
-                .with_label("not a constant")
-                .with_note("each set of parameter values is implicitized once, when the scene loads"));
+                .with_label("this depends on the point")
+                .with_note("each set of parameter values is implicitized once: they may use constants, scene parameters and `t` but not `p`"));
         };
         let a = self.lib.analysis(s, &vals)?;
+        self.note_bound(s);
         let pc = [p.c[0], p.c[1], p.c[2]];
         let mut d = match (&a.equation, &a.field, s.options.bound) {
             (Ok(eq), _, BoundMethod::FirstOrder) => {

@@ -708,7 +708,7 @@ impl ParametricCoords {
     pub fn point(&self, s: f64, t: f64) -> [f64; 3] {
         self.coords
             .each_ref()
-            .map(|tape| crate::PointEvaluator::<f64>::new(tape).eval(s, t, 0.0))
+            .map(|tape| crate::PointEvaluator::<f64>::new(tape).eval(&[], s, t, 0.0))
     }
 
     /// The point at (s, t) and its exact partial derivatives ∂/∂s and ∂/∂t
@@ -717,6 +717,7 @@ impl ParametricCoords {
         let (mut p, mut ds, mut dt) = ([0.0; 3], [0.0; 3], [0.0; 3]);
         for (k, tape) in self.coords.iter().enumerate() {
             let v = crate::PointEvaluator::<crate::Dual>::new(tape).eval(
+                &[],
                 crate::Dual {
                     v: s,
                     d: [1.0, 0.0, 0.0],

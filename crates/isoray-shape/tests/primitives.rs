@@ -216,7 +216,7 @@ fn smooth_operators_match_their_formulas() {
     )
     .unwrap();
     let mut e = isoray_shape::PointEvaluator::<f32>::new(far.tape());
-    let v = e.eval(0.0, 0.0, 30.0);
+    let v = e.eval(&[], 0.0, 0.0, 30.0);
     let (da, db) = (29.0f64, (904.0f64).sqrt() - 1.0);
     let want = ((da.powi(16) * db.powi(16)) / (da.powi(16) + db.powi(16))).powf(1.0 / 16.0);
     assert!(v.is_finite() && (v as f64 - want).abs() < 1e-3, "{v} vs {want}");

@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use clap::{Parser, Subcommand};
 use isoray_render::{output, render, tile_count, RenderOptions};
-use isoray_scene::{load, Scene, SceneError};
+use isoray_scene::{load_with, LoadOptions, Scene, SceneError};
 
 /// Model implicit surfaces and render them with rays.
 #[derive(Parser)]
@@ -27,8 +27,8 @@ struct Cli {
 enum Command {
     /// Render a scene to a PNG (and optional EXR depth and normal AOVs).
     Render {
-        /// The scene file (TOML).
-        scene: PathBuf,
+        #[command(flatten)]
+        input: SceneArgs,
         /// Output PNG.
         #[arg(short, long, value_name = "OUT.png")]
         output: PathBuf,
@@ -41,9 +41,6 @@ enum Command {
         /// Supersampling factor: N×N samples per pixel (overrides render.aa).
         #[arg(long, value_name = "N")]
         aa: Option<u32>,
-        /// Override any scene key, e.g. render.shadows=hard or light.0.intensity=2.
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
         /// Write the depth AOV (channel Z, t along the centre ray, +inf on misses).
         #[arg(long, value_name = "F.exr")]
         depth: Option<PathBuf>,
@@ -62,11 +59,8 @@ enum Command {
     },
     /// Read points `x y z` from stdin and print the scene's signed distance at each.
     Eval {
-        /// The scene file.
-        scene: PathBuf,
-        /// Override any scene key.
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
+        #[command(flatten)]
+        input: SceneArgs,
     },
     /// Compute a reduced Gröbner basis; prints one polynomial per line.
     Groebner {
@@ -118,20 +112,17 @@ enum Command {
     /// Print what isoray derives for a surface: its implicit equation,
     /// degree, the distance bound it traces, and timings.
     Surface {
-        /// The scene file.
-        scene: PathBuf,
+        #[command(flatten)]
+        input: SceneArgs,
         /// The surface's name (`[surface.NAME]`).
         name: String,
-        /// Override any scene key.
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
     },
     /// Render a scene with the classic polygon pipeline: objects meshed,
     /// scan-converted behind a Z-buffer or an A-buffer and shaded, with
     /// shadow buffers and environment-mapped reflections and refractions.
     Raster {
-        /// The scene file (TOML).
-        scene: PathBuf,
+        #[command(flatten)]
+        input: SceneArgs,
         /// Output PNG.
         #[arg(short, long, value_name = "OUT.png")]
         output: PathBuf,
@@ -172,9 +163,6 @@ enum Command {
         /// Image height (overrides render.height).
         #[arg(long, value_name = "H")]
         height: Option<u32>,
-        /// Override any scene key.
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
         /// Worker threads (default: all cores).
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
@@ -187,8 +175,8 @@ enum Command {
     /// meshed by sparse-octree dual contouring (closed, manifold, sharp
     /// edges kept); a parametric surface is tessellated over its (s, t) domain.
     Mesh {
-        /// The scene file.
-        scene: PathBuf,
+        #[command(flatten)]
+        input: SceneArgs,
         /// An object's name (`[[object]] name`) or a surface's (`[surface.NAME]`);
         /// leave out to mesh every object (unbounded ones, such as planes, are skipped).
         name: Option<String>,
@@ -228,9 +216,6 @@ enum Command {
         /// Also look for self-intersecting triangles (slower).
         #[arg(long)]
         check_intersections: bool,
-        /// Override any scene key.
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
         /// Worker threads (default: all cores).
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
@@ -242,12 +227,41 @@ enum Command {
     /// call implicit or parametric surfaces are also checked on sampled camera
     /// rays for distance estimates that overstep the surface.
     Check {
-        /// The scene file.
-        scene: PathBuf,
-        /// Override any scene key.
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
+        #[command(flatten)]
+        input: SceneArgs,
     },
+}
+
+/// The scene a command reads, its overrides and the time.
+#[derive(clap::Args, Clone, Debug)]
+pub(crate) struct SceneArgs {
+    /// The scene file (TOML).
+    scene: PathBuf,
+    /// Override any scene key, e.g. render.shadows=hard, light.0.intensity=2
+    /// or params.k=0.5 (a parameter outside its declared range is an error).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// The time t in seconds, which shape text reads as `t` (default 0).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_name = "T")]
+    time: f64,
+}
+
+impl SceneArgs {
+    /// Loads the scene with these overrides followed by `extra`.
+    pub(crate) fn load(&self, extra: &[String]) -> Result<Scene, Failure> {
+        let mut overrides = self.set.clone();
+        overrides.extend_from_slice(extra);
+        let opts = LoadOptions {
+            time: self.time,
+            ..LoadOptions::default()
+        };
+        Ok(load_with(&self.scene, &overrides, &opts)?)
+    }
+
+    /// The scene file.
+    pub(crate) fn path(&self) -> &Path {
+        &self.scene
+    }
 }
 
 /// A failure with its exit code: 1 for rendering/IO, 2 for bad input.
@@ -269,19 +283,18 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render {
-            scene,
+            input,
             output,
             width,
             height,
             aa,
-            set,
             depth,
             normals,
             albedo,
             threads,
             quiet,
         } => {
-            let mut overrides = set;
+            let mut overrides = Vec::new();
             overrides.extend(width.map(|w| format!("render.width={w}")));
             overrides.extend(height.map(|h| format!("render.height={h}")));
             overrides.extend(aa.map(|a| format!("render.aa={a}")));
@@ -291,9 +304,9 @@ fn main() -> ExitCode {
                 normals: normals.as_deref(),
                 albedo: albedo.as_deref(),
             };
-            cmd_render(&scene, &overrides, &outputs, threads, quiet)
+            cmd_render(&input, &overrides, &outputs, threads, quiet)
         }
-        Command::Eval { scene, set } => cmd_eval(&scene, &set),
+        Command::Eval { input } => cmd_eval(&input),
         Command::Groebner {
             vars,
             order,
@@ -312,9 +325,9 @@ fn main() -> ExitCode {
             stats,
             timeout,
         } => algebra_cmd::cmd_implicitize(&x, &y, z.as_deref(), params.as_deref(), &method, stats, timeout),
-        Command::Check { scene, set } => cmd_check(&scene, &set),
+        Command::Check { input } => cmd_check(&input),
         Command::Raster {
-            scene,
+            input,
             output,
             hidden,
             shading,
@@ -327,15 +340,14 @@ fn main() -> ExitCode {
             add_surface,
             width,
             height,
-            set,
             threads,
             quiet,
         } => {
-            let mut overrides = set;
+            let mut overrides = Vec::new();
             overrides.extend(width.map(|w| format!("render.width={w}")));
             overrides.extend(height.map(|h| format!("render.height={h}")));
             raster_cmd::cmd_raster(&raster_cmd::RasterArgs {
-                scene: &scene,
+                input: &input,
                 output: &output,
                 hidden,
                 shading,
@@ -352,7 +364,7 @@ fn main() -> ExitCode {
             })
         }
         Command::Mesh {
-            scene,
+            input,
             name,
             output,
             resolution,
@@ -362,11 +374,10 @@ fn main() -> ExitCode {
             offset,
             tolerance,
             check_intersections,
-            set,
             threads,
             quiet,
         } => mesh_cmd::cmd_mesh(&mesh_cmd::MeshArgs {
-            scene: &scene,
+            input: &input,
             name: name.as_deref(),
             output: &output,
             resolution,
@@ -375,12 +386,11 @@ fn main() -> ExitCode {
             lipschitz,
             offset,
             tolerance,
-            overrides: &set,
             threads,
             check_intersections,
             quiet,
         }),
-        Command::Surface { scene, name, set } => cmd_surface(&scene, &name, &set),
+        Command::Surface { input, name } => cmd_surface(&input, &name),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -396,8 +406,8 @@ fn main() -> ExitCode {
     }
 }
 
-fn cmd_check(scene_path: &Path, overrides: &[String]) -> Result<(), Failure> {
-    let scene = load(scene_path, overrides)?;
+fn cmd_check(input: &SceneArgs) -> Result<(), Failure> {
+    let scene = input.load(&[])?;
     println!("ok");
     for c in isoray_render::bounds::check_scene(&scene) {
         let what = object_label(&scene, c.object);
@@ -438,8 +448,9 @@ fn violation_warning(what: &str, c: &isoray_render::bounds::BoundCheck) -> Strin
     )
 }
 
-fn cmd_surface(scene_path: &Path, name: &str, overrides: &[String]) -> Result<(), Failure> {
-    let scene = load(scene_path, overrides)?;
+fn cmd_surface(input: &SceneArgs, name: &str) -> Result<(), Failure> {
+    let scene_path = input.path();
+    let scene = input.load(&[])?;
     let lib = &scene.library;
     let Some(s) = lib.surface(name) else {
         let names = lib.surface_names();
@@ -484,7 +495,7 @@ struct Outputs<'a> {
 }
 
 fn cmd_render(
-    scene_path: &Path,
+    input: &SceneArgs,
     overrides: &[String],
     outputs: &Outputs,
     threads: Option<usize>,
@@ -507,7 +518,7 @@ fn cmd_render(
     if threads == Some(0) {
         return Err(usage("--threads must be at least 1".into()));
     }
-    let scene = load(scene_path, overrides)?;
+    let scene = input.load(overrides)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()
@@ -618,8 +629,8 @@ fn summary(scene: &Scene, stats: &isoray_render::Stats, secs: f64, out: &Path) {
     }
 }
 
-fn cmd_eval(scene_path: &Path, overrides: &[String]) -> Result<(), Failure> {
-    let scene = load(scene_path, overrides)?;
+fn cmd_eval(input: &SceneArgs) -> Result<(), Failure> {
+    let scene = input.load(&[])?;
     let mut eval = isoray_shape::PointEvaluator::<f64>::new(scene.shape.tape());
     let stdin = std::io::stdin();
     let stdout = std::io::stdout();
@@ -644,7 +655,7 @@ fn cmd_eval(scene_path: &Path, overrides: &[String]) -> Result<(), Failure> {
                 )))
             }
         };
-        let d = eval.eval(p[0], p[1], p[2]);
+        let d = eval.eval(&scene.inputs, p[0], p[1], p[2]);
         writeln!(out, "{d}").map_err(|e| io_failure(format!("cannot write stdout: {e}")))?;
     }
     out.flush()

@@ -10,14 +10,14 @@ use std::time::{Duration, Instant};
 use isoray_mesh::io::{self as mesh_io, Format};
 use isoray_mesh::parametric::{tessellate, TessellationSettings};
 use isoray_mesh::{mesh_shape_with, self_intersections, Control, Mesh, MeshError, MeshMaterial, MeshSettings, Stage};
-use isoray_scene::{load, Scene};
+use isoray_scene::Scene;
 use isoray_shape::{Shape, SurfaceMode};
 
 use crate::{io_failure, usage, Failure};
 
 /// What `isoray mesh` was asked to do.
 pub(crate) struct MeshArgs<'a> {
-    pub scene: &'a Path,
+    pub input: &'a crate::SceneArgs,
     pub name: Option<&'a str>,
     pub output: &'a Path,
     pub resolution: Option<u32>,
@@ -26,7 +26,6 @@ pub(crate) struct MeshArgs<'a> {
     pub lipschitz: Option<f64>,
     pub offset: f64,
     pub tolerance: Option<f64>,
-    pub overrides: &'a [String],
     pub threads: Option<usize>,
     pub check_intersections: bool,
     pub quiet: bool,
@@ -74,7 +73,11 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
             )));
         }
     }
-    let scene = load(a.scene, a.overrides)?;
+    let mut scene = a.input.load(&[])?;
+    // The mesher takes a shape at one moment: fix the time and parameters.
+    for i in 0..scene.objects.len() {
+        scene.objects[i].shape = scene.frozen(&scene.objects[i].shape);
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads.unwrap_or(0))
         .build()
@@ -103,26 +106,28 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
                     material: Some(material(&scene, o.material)),
                 }]
             } else if scene.library.surface(name).is_some() {
-                compiled = isoray_shape::compile(&scene.library, &format!("{name}(p)")).map_err(|d| {
-                    usage(format!(
-                        "cannot mesh surface `{name}` with its default parameters: {}",
-                        d.message
-                    ))
-                })?;
+                compiled = isoray_shape::compile(&scene.library, &format!("{name}(p)"))
+                    .map(|s| scene.frozen(&s))
+                    .map_err(|d| {
+                        usage(format!(
+                            "cannot mesh surface `{name}` with its default parameters: {}",
+                            d.message
+                        ))
+                    })?;
                 vec![Target {
                     label: format!("surface `{name}`"),
                     shape: &compiled,
                     material: None,
                 }]
             } else {
-                return Err(usage(unknown_name(a.scene, &scene, name)));
+                return Err(usage(unknown_name(a.input.path(), &scene, name)));
             }
         }
         None => {
             if scene.objects.is_empty() {
                 return Err(usage(format!(
                     "the scene `{}` has no objects to mesh",
-                    a.scene.display()
+                    a.input.path().display()
                 )));
             }
             scene

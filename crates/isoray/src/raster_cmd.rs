@@ -13,7 +13,6 @@ use isoray_raster::render::{raster_meshes, HiddenSurface, RasterOptions, Reflect
 use isoray_raster::scene::{mesh_scene, MeshedScene};
 use isoray_raster::shading::Shading;
 use isoray_render::output;
-use isoray_scene::load;
 use isoray_scene::Scene;
 
 use crate::{io_failure, usage, Failure};
@@ -64,7 +63,7 @@ pub(crate) enum Reflections {
 
 /// What `isoray raster` was asked to do.
 pub(crate) struct RasterArgs<'a> {
-    pub scene: &'a Path,
+    pub input: &'a crate::SceneArgs,
     pub output: &'a Path,
     pub hidden: Hidden,
     pub shading: ShadingArg,
@@ -107,7 +106,7 @@ pub(crate) fn cmd_raster(a: &RasterArgs) -> Result<(), Failure> {
             return Err(usage(format!("--resolution must be at least 2, found {r}")));
         }
     }
-    let scene = load(a.scene, a.overrides)?;
+    let scene = a.input.load(a.overrides)?;
     let opts = RasterOptions {
         hidden: match a.hidden {
             Hidden::Zbuffer => HiddenSurface::ZBuffer,
@@ -279,7 +278,7 @@ fn report_json(
     let t = image.timings;
     format!(
         "{{\n  \"scene\": {},\n  \"hidden\": {},\n  \"shading\": {},\n  \"shadows\": {},\n  \"reflections\": {},\n  \"map_size\": {},\n  \"width\": {},\n  \"height\": {},\n  \"triangles\": {},\n  \"reflective_pixels\": {},\n  \"angular_error_deg\": {{ \"mean\": {}, \"rms\": {}, \"p95\": {}, \"max\": {} }},\n  \"wrong_pixels\": {},\n  \"wrong_fraction\": {},\n  \"psnr_db\": {},\n  \"seconds\": {{ \"mesh\": {}, \"maps\": {}, \"draw\": {}, \"raytrace\": {} }},\n  \"map_fragments\": {},\n  \"raytrace_image\": {}\n}}\n",
-        json_string(&a.scene.display().to_string()),
+        json_string(&a.input.path().display().to_string()),
         json_string(&value_name(&a.hidden)),
         json_string(&value_name(&a.shading)),
         json_string(&value_name(&a.shadows)),

@@ -34,16 +34,7 @@ fn write_scene(name: &str, text: &str) -> PathBuf {
 
 /// Runs `isoray eval SCENE` with `input` on stdin.
 fn eval_stdin(scene: &Path, input: &[u8]) -> Output {
-    let mut child = isoray()
-        .arg("eval")
-        .arg(scene)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child.stdin.take().unwrap().write_all(input).unwrap();
-    child.wait_with_output().unwrap()
+    eval_with(scene, &[], input)
 }
 
 const SPHERE: &str = "[camera]\nposition = [0.0, 0.0, 4.0]\n[render]\nwidth = 40\nheight = 30\n[[light]]\n[[object]]\nshape = \"sphere(p, 1.0)\"\n";
@@ -419,4 +410,104 @@ fn albedo_aov_holds_the_first_hit_diffuse_colour() {
         .arg("--albedo")
         .arg(tmp("a.png")));
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// Runs `isoray eval SCENE ARGS...` with `input` on stdin.
+fn eval_with(scene: &Path, args: &[&str], input: &[u8]) -> Output {
+    let mut child = isoray()
+        .arg("eval")
+        .arg(scene)
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The command may exit on bad input before it reads stdin.
+    let _ = child.stdin.take().unwrap().write_all(input);
+    child.wait_with_output().unwrap()
+}
+
+const MOVING: &str =
+    "[params]\nk = { default = 1.0, range = [0.5, 2.0] }\n[[object]]\nshape = \"sphere(p - vec3(t, 0.0, 0.0), k)\"\n";
+
+#[test]
+fn time_and_parameters_are_inputs() {
+    let scene = write_scene("moving.toml", MOVING);
+    let dist = |args: &[&str]| -> f64 {
+        let o = eval_with(&scene, args, b"0 0 0\n");
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).trim().parse().unwrap()
+    };
+    // |p − (t, 0, 0)| − k at the origin.
+    assert_eq!(dist(&[]), -1.0);
+    assert_eq!(dist(&["--time", "2.5"]), 1.5);
+    assert_eq!(dist(&["--time", "-3"]), 2.0);
+    assert_eq!(dist(&["--set", "params.k=1.75", "--time", "1"]), -0.75);
+    // A value outside the declared range names the range; exit 2.
+    let o = eval_with(&scene, &["--set", "params.k=5"], b"0 0 0\n");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("`params.k` = 5 is outside its range [0.5, 2]"),
+        "{}",
+        stderr(&o)
+    );
+    let o = eval_with(&scene, &["--time", "inf"], b"0 0 0\n");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("finite"), "{}", stderr(&o));
+    // `t` cannot be a parameter's name.
+    let bad = write_scene(
+        "param-t.toml",
+        "[params]\nt = 1.0\n[[object]]\nshape = \"sphere(p, t)\"\n",
+    );
+    let o = eval_with(&bad, &[], b"0 0 0\n");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("built-in time"), "{}", stderr(&o));
+}
+
+#[test]
+fn every_scene_command_takes_a_time() {
+    let scene = write_scene(
+        "moving-render.toml",
+        &format!("[camera]\nposition = [0.0, 0.0, 6.0]\n[render]\nwidth = 24\nheight = 16\n{MOVING}"),
+    );
+    let a = tmp("t0.png");
+    let b = tmp("t1.png");
+    for (t, out) in [("0", &a), ("1.5", &b)] {
+        let o = run(isoray()
+            .arg("render")
+            .arg(&scene)
+            .args(["--time", t, "-q", "-o"])
+            .arg(out));
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    assert_ne!(
+        std::fs::read(&a).unwrap(),
+        std::fs::read(&b).unwrap(),
+        "the sphere moved"
+    );
+    let o = run(isoray().arg("check").arg(&scene).args(["--time", "1"]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run(isoray()
+        .arg("raster")
+        .arg(&scene)
+        .args(["--time", "1", "-q", "-o"])
+        .arg(tmp("r.png")));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mesh = tmp("moved.obj");
+    let o = run(isoray()
+        .arg("mesh")
+        .arg(&scene)
+        .args(["--time", "3", "-q", "--resolution", "16", "-o"])
+        .arg(&mesh));
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The mesh is the unit sphere moved to x = 3.
+    let text = std::fs::read_to_string(&mesh).unwrap();
+    let xs: Vec<f64> = text
+        .lines()
+        .filter(|l| l.starts_with("v "))
+        .map(|l| l.split_whitespace().nth(1).unwrap().parse().unwrap())
+        .collect();
+    let mean = xs.iter().sum::<f64>() / xs.len() as f64;
+    assert!((mean - 3.0).abs() < 0.05, "mean x {mean}");
 }
