@@ -960,6 +960,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     lib.check().map_err(|d| shape_error(&snippets, d))?;
 
     // [[object]]
+    let mut transformed = 0usize;
     let mut builder = Builder::new();
     let mut objects = Vec::new();
     let mut nodes = Vec::new();
@@ -1001,14 +1002,49 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                         &[],
                     ));
                 };
-                r.finish(&["name", "material", "shape"])?;
+                // The placement: each value a number or shape text of t and parameters.
+                let mut placement: Vec<(&str, Option<&Located>)> = Vec::new();
+                for key in TRANSFORM_KEYS {
+                    placement.push((key, r.get(key)));
+                }
+                r.finish(OBJECT_KEYS)?;
+                let transform = if placement.iter().any(|(_, v)| v.is_some()) {
+                    let mut values: Vec<Shape> = Vec::with_capacity(7);
+                    for (key, v) in &placement {
+                        let ctx = format!("object.{i}.{key}");
+                        let (width, default) = if *key == "scale" { (1, 1.0) } else { (3, 0.0) };
+                        let Some(v) = v else {
+                            values.extend((0..width).map(|_| constant_shape(default)));
+                            continue;
+                        };
+                        let vals = uniform_values(src, &lib, v, &ctx, width, &mut snippets)
+                            .map_err(|e| e.into_scene(&snippets, &shape_error))?;
+                        values.extend(vals);
+                    }
+                    let inputs = lib.input_count() as u32 + 7 * transformed as u32;
+                    transformed += 1;
+                    Some(Transform {
+                        inputs,
+                        values: values.try_into().expect("seven values"),
+                        scale_origin: placement[2].1.map(|l| l.origin),
+                    })
+                } else {
+                    None
+                };
                 let Item::Str(_, map) = &loc.item else { unreachable!() };
                 let id = snippets.len();
                 snippets.push((loc, map));
+                let p = match &transform {
+                    Some(tr) => tr.lower_point(&mut builder),
+                    None => [builder.x(), builder.y(), builder.z()],
+                };
                 let compiled = isoray_shape::syntax::parse(text, id)
-                    .and_then(|prog| lib.compile_tracked(&mut builder, &prog, id))
+                    .and_then(|prog| lib.compile_at(&mut builder, &prog, id, p))
                     .map_err(|d| shape_error(&snippets, d))?;
-                let node = compiled.node;
+                let node = match &transform {
+                    Some(tr) => tr.lower_distance(&mut builder, compiled.node),
+                    None => compiled.node,
+                };
                 nodes.push(node);
                 // Without a material of its own, an object takes the default
                 // material of the first surface its shape calls.
@@ -1027,6 +1063,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                     source: text.to_string(),
                     shape: Shape::from_tape(builder.tape(node)),
                     bound_inputs: compiled.bound,
+                    transform,
                 });
             }
         }
@@ -1088,7 +1125,17 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         None
     };
     // Planes and spheres are intersected in closed form; the rest is marched.
-    let inputs = lib.input_values();
+    let mut input_names = lib.input_names();
+    let mut inputs = lib.input_values();
+    for (i, o) in objects.iter().enumerate() {
+        if let Some(tr) = &o.transform {
+            for (k, name) in TRANSFORM_INPUTS.iter().enumerate() {
+                input_names.push(format!("object.{i}.{name}"));
+                inputs.push(tr.values[k].eval_with(&inputs, [0.0; 3]));
+            }
+            check_scale(src, i, tr, inputs[tr.inputs as usize + 6])?;
+        }
+    }
     let analytic: Vec<Option<crate::analytic::Analytic>> = if analytic_allowed(&render) {
         objects
             .iter()
@@ -1125,12 +1172,134 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         environment,
         analytic,
         rest,
-        input_names: lib.input_names(),
+        input_names,
         inputs,
         library: lib,
         param_ranges,
         origin: std::sync::Arc::new(SceneOrigin { sources: src.clone() }),
     })
+}
+
+/// The keys of an `[[object]]`.
+const OBJECT_KEYS: &[&str] = &["name", "material", "shape", "position", "rotation", "scale"];
+
+/// The placement keys of an `[[object]]`, in input order.
+const TRANSFORM_KEYS: [&str; 3] = ["position", "rotation", "scale"];
+
+/// The names of an object's seven transform inputs.
+const TRANSFORM_INPUTS: [&str; 7] = [
+    "position.x",
+    "position.y",
+    "position.z",
+    "rotation.x",
+    "rotation.y",
+    "rotation.z",
+    "scale",
+];
+
+/// A scale must be positive (a distance is scaled by it).
+pub(crate) fn check_scale(src: &Sources, object: usize, tr: &Transform, s: f64) -> Result<()> {
+    if s.is_finite() && s > 0.0 {
+        return Ok(());
+    }
+    let msg = format!("`object.{object}.scale` must be a positive number, found {s}");
+    Err(match tr.scale_origin {
+        Some(o) => src.error(o, msg, Some("expected a scale > 0"), &[]),
+        None => SceneError::usage(msg),
+    })
+}
+
+/// A shape that is the constant `v` (a fixed value of the scene).
+fn constant_shape(v: f64) -> Shape {
+    let mut b = Builder::new();
+    let n = b.constant(v);
+    Shape::from_tape(b.tape(n))
+}
+
+/// Shape text snippets: per source id, the value it came from and the byte
+/// map of its text into the file or override.
+type Snippets<'a> = [(&'a Located, &'a [usize])];
+
+/// A failure reading a value that may be shape text.
+enum ValueError {
+    Scene(SceneError),
+    Shape(Diagnostic),
+}
+
+impl ValueError {
+    fn into_scene(
+        self,
+        snippets: &Snippets,
+        shape_error: &dyn Fn(&Snippets, Diagnostic) -> SceneError,
+    ) -> SceneError {
+        match self {
+            ValueError::Scene(e) => e,
+            ValueError::Shape(d) => shape_error(snippets, d),
+        }
+    }
+}
+
+/// A number, shape text (a `float`, or a `vec3` when `width` is 3), or for
+/// width 3 an array of three such: each component as a tape of the inputs.
+fn uniform_values<'a>(
+    src: &Sources,
+    lib: &Library,
+    v: &'a Located,
+    ctx: &str,
+    width: usize,
+    snippets: &mut Vec<(&'a Located, &'a [usize])>,
+) -> std::result::Result<Vec<Shape>, ValueError> {
+    let expected = if width == 1 {
+        "a number, or shape text such as \"1.0 + 0.5*sin(t)\"".to_string()
+    } else {
+        "an array of 3 numbers (or shape text for any of them), or shape text giving a vec3".to_string()
+    };
+    let bad = |v: &Located| {
+        ValueError::Scene(src.error(
+            v.origin,
+            format!("`{ctx}`: expected {expected}, found {}", describe(&v.item)),
+            Some("expected a value"),
+            &[],
+        ))
+    };
+    let text_values = |loc: &'a Located, want: usize, snippets: &mut Vec<(&'a Located, &'a [usize])>| {
+        let Item::Str(text, map) = &loc.item else {
+            unreachable!()
+        };
+        let id = snippets.len();
+        snippets.push((loc, map));
+        let mut b = Builder::new();
+        let (ty, comps) = lib.compile_uniform(&mut b, text, id).map_err(ValueError::Shape)?;
+        if ty.width() != want {
+            let want_ty = if want == 1 { "float" } else { "vec3" };
+            return Err(ValueError::Scene(src.error(
+                loc.origin,
+                format!("`{ctx}`: the expression is a `{ty}`, expected a `{want_ty}`"),
+                Some(&format!("expected a {want_ty}")),
+                &[],
+            )));
+        }
+        Ok(comps
+            .into_iter()
+            .map(|n| Shape::from_tape(b.tape(n)))
+            .collect::<Vec<_>>())
+    };
+    match &v.item {
+        Item::Num(x, _) if width == 1 && x.is_finite() => Ok(vec![constant_shape(*x)]),
+        Item::Str(..) => text_values(v, width, snippets),
+        Item::Array(items) if width == 3 && items.len() == 3 => {
+            let mut out = Vec::new();
+            for it in items {
+                match &it.item {
+                    Item::Num(x, _) if x.is_finite() => out.push(constant_shape(*x)),
+                    Item::Str(..) => out.extend(text_values(it, 1, snippets)?),
+                    _ => return Err(bad(it)),
+                }
+            }
+            Ok(out)
+        }
+        _ => Err(bad(v)),
+    }
 }
 
 /// Whether objects may be intersected in closed form with these settings.

@@ -351,10 +351,72 @@ pub struct Object {
     pub source: String,
     /// The compiled shape.
     pub shape: Shape,
+    /// Where the object is placed (`position`, `rotation`, `scale`), when
+    /// any of them is given.
+    pub transform: Option<Transform>,
     /// Inputs whose values were bound into `shape` as constants by exact
     /// algebra (implicit and parametric surfaces): changing one recompiles
     /// the object. Every other input the shape reads stays live.
     pub bound_inputs: Vec<u32>,
+}
+
+/// An object's placement: its shape d₀ is rotated about x, then y, then z
+/// (world axes, degrees), scaled uniformly by s and moved to `position`:
+/// d(p) = s·d₀(R⁻¹(p − c)/s), so distances stay exact.
+///
+/// The seven values are runtime inputs of the object's tape (from index
+/// `inputs`: position x, y, z, rotation x, y, z, scale), computed from
+/// `values` whenever the time or a parameter changes; animation, physics
+/// and the studio move an object without recompiling it.
+#[derive(Debug, Clone)]
+pub struct Transform {
+    /// The first of the object's seven inputs.
+    pub inputs: u32,
+    /// The expressions of the seven values (constants, or of `t` and the parameters).
+    pub values: [Shape; 7],
+    /// Where `scale` was written, for errors.
+    pub(crate) scale_origin: Option<crate::doc::Origin>,
+}
+
+impl Transform {
+    /// The nodes of R⁻¹(p − c)/s for the point X, Y, Z of `b`.
+    pub fn lower_point(&self, b: &mut isoray_shape::Builder) -> [isoray_shape::Node; 3] {
+        let k = self.inputs;
+        let input = |b: &mut isoray_shape::Builder, j: u32| b.input(k + j);
+        let (x, y, z) = (b.x(), b.y(), b.z());
+        let (cx, cy, cz) = (input(b, 0), input(b, 1), input(b, 2));
+        let mut q = [b.sub(x, cx), b.sub(y, cy), b.sub(z, cz)];
+        // Undo the rotations in reverse order: z, then y, then x.
+        for (axis, j) in [(2usize, 5u32), (1, 4), (0, 3)] {
+            let deg = input(b, j);
+            let rad = b.mul_c(deg, std::f64::consts::PI / 180.0);
+            let (c, s) = (
+                b.unary(isoray_shape::ir::UnOp::Cos, rad),
+                b.unary(isoray_shape::ir::UnOp::Sin, rad),
+            );
+            // The plane of the rotation, in right-handed order (u, v).
+            let (u, v) = match axis {
+                0 => (1, 2),
+                1 => (2, 0),
+                _ => (0, 1),
+            };
+            // Turning by −θ: (u cos θ + v sin θ, −u sin θ + v cos θ).
+            let (uc, vs) = (b.mul(q[u], c), b.mul(q[v], s));
+            let (us, vc) = (b.mul(q[u], s), b.mul(q[v], c));
+            let nu = b.add(uc, vs);
+            let nv = b.sub(vc, us);
+            q[u] = nu;
+            q[v] = nv;
+        }
+        let scale = input(b, 6);
+        q.map(|c| b.div(c, scale))
+    }
+
+    /// s·d for the object's distance d at the transformed point.
+    pub fn lower_distance(&self, b: &mut isoray_shape::Builder, d: isoray_shape::Node) -> isoray_shape::Node {
+        let scale = b.input(self.inputs + 6);
+        b.mul(d, scale)
+    }
 }
 
 /// A loaded, checked and compiled scene.
@@ -457,8 +519,9 @@ impl Scene {
                 "the time must be a finite number of seconds, found {t}"
             )));
         }
+        let (next, changed) = self.next_inputs(&[isoray_shape::TIME], |inputs| inputs[0] = t)?;
         self.library.set_time(t);
-        self.update_inputs(&[isoray_shape::TIME], |inputs| inputs[0] = t)
+        self.apply_inputs(next, changed)
     }
 
     /// Sets a number or vector parameter (`[params]`) to `value`: an error
@@ -496,22 +559,52 @@ impl Scene {
                 )));
             }
         }
+        let vars: Vec<u32> = (at..at + ty.width() as u32).collect();
+        let (next, changed) = self.next_inputs(&vars, |inputs| {
+            for (k, x) in comps.iter().enumerate() {
+                inputs[at as usize + k] = *x;
+            }
+        })?;
         self.library.set_param(name, value);
         if let Some(p) = self.params.iter_mut().find(|(n, _)| n == name) {
             p.1 = value;
         }
-        let vars: Vec<u32> = (at..at + ty.width() as u32).collect();
-        self.update_inputs(&vars, |inputs| {
-            for (k, x) in comps.iter().enumerate() {
-                inputs[at as usize + k] = *x;
-            }
-        })
+        self.apply_inputs(next, changed)
     }
 
-    /// Applies a change of inputs `vars`: recompiles objects that bound one,
-    /// and re-derives the closed forms of objects that read one.
-    fn update_inputs(&mut self, vars: &[u32], set: impl FnOnce(&mut Vec<f64>)) -> Result<(), crate::SceneError> {
-        set(&mut self.inputs);
+    /// The inputs after setting base inputs with `set`, with every object
+    /// placement computed again, and the indices that changed (`vars` and
+    /// the placements that moved); an error when a scale is not positive.
+    fn next_inputs(
+        &self,
+        vars: &[u32],
+        set: impl FnOnce(&mut Vec<f64>),
+    ) -> Result<(Vec<f64>, Vec<u32>), crate::SceneError> {
+        let mut next = self.inputs.clone();
+        set(&mut next);
+        let mut changed = vars.to_vec();
+        for (i, o) in self.objects.iter().enumerate() {
+            let Some(tr) = &o.transform else { continue };
+            for (k, value) in tr.values.iter().enumerate() {
+                let at = tr.inputs as usize + k;
+                let v = value.eval_with(&next, [0.0; 3]);
+                if k == 6 {
+                    crate::load::check_scale(&self.origin.sources, i, tr, v)?;
+                }
+                if v.to_bits() != next[at].to_bits() {
+                    next[at] = v;
+                    changed.push(at as u32);
+                }
+            }
+        }
+        Ok((next, changed))
+    }
+
+    /// Applies new inputs: recompiles objects that bound a changed one, and
+    /// re-derives the closed forms of objects that read one.
+    fn apply_inputs(&mut self, next: Vec<f64>, changed: Vec<u32>) -> Result<(), crate::SceneError> {
+        self.inputs = next;
+        let vars = &changed[..];
         let bound = self
             .objects
             .iter()

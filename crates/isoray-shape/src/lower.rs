@@ -505,8 +505,21 @@ impl Library {
         program: &Program,
         source: SourceId,
     ) -> Result<Compiled, Diagnostic> {
+        let p = [b.x(), b.y(), b.z()];
+        self.compile_at(b, program, source, p)
+    }
+
+    /// Compiles a parsed program with `p` bound to the given nodes (a
+    /// transformed point), reporting the inputs its analyses bound.
+    pub fn compile_at(
+        &self,
+        b: &mut Builder,
+        program: &Program,
+        source: SourceId,
+        p: [Node; 3],
+    ) -> Result<Compiled, Diagnostic> {
         let mut l = Lowerer::new(b, self, source);
-        let p = l.point();
+        let p = Val::vec3(p[0], p[1], p[2]);
         l.scope.push(("p".to_string(), p));
         let v = l.program(program)?;
         if v.ty != Type::Float {
@@ -522,6 +535,30 @@ impl Library {
             node: v.s(),
             bound: l.bound,
         })
+    }
+}
+
+impl Library {
+    /// Compiles shape text that does not depend on the point (it may read
+    /// constants, parameters and `t`, but not `p`) to its 1 to 3 components.
+    pub fn compile_uniform(
+        &self,
+        b: &mut Builder,
+        text: &str,
+        source: SourceId,
+    ) -> Result<(Type, Vec<Node>), Diagnostic> {
+        let program = parse(text, source)?;
+        let mut l = Lowerer::new(b, self, source);
+        let v = l.program(&program)?;
+        let comps = v.comps().to_vec();
+        if comps.iter().any(|&n| !l.b.is_uniform(n)) {
+            return Err(
+                Diagnostic::new(source, program.body.span, "this value depends on the point")
+                    .with_label("not the same everywhere")
+                    .with_note("values of the scene may use numbers, parameters and `t`"),
+            );
+        }
+        Ok((v.ty, comps))
     }
 }
 
