@@ -10,8 +10,6 @@
 //! * The output is the reduced basis: minimal, interreduced, normalised (monic
 //!   over a field), sorted by increasing leading monomial.
 
-use std::sync::atomic::{AtomicBool, Ordering as AtomicOrdering};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use num_traits::One;
@@ -38,8 +36,8 @@ pub struct Budget {
     pub time: Option<Duration>,
     /// Limit on reduction steps (a measure of work independent of the machine).
     pub steps: Option<u64>,
-    /// Set to true (from another thread or a signal handler) to stop.
-    pub interrupt: Option<Arc<AtomicBool>>,
+    /// Cancelled (from another thread or a signal handler) to stop.
+    pub interrupt: Option<isoray_job::CancelToken>,
 }
 
 /// Options of [`groebner`].
@@ -443,8 +441,8 @@ impl<'a, D: Domain> State<'a, D> {
                 });
             }
         }
-        if let Some(flag) = &b.interrupt {
-            if flag.load(AtomicOrdering::Relaxed) {
+        if let Some(token) = &b.interrupt {
+            if token.is_cancelled() {
                 return Err(GroebnerError::Interrupted {
                     stats: snapshot(&self.stats, self.start),
                 });
@@ -792,10 +790,11 @@ mod tests {
             groebner(&ring, &polys, &opts),
             Err(GroebnerError::WorkLimit { .. })
         ));
-        let flag = Arc::new(AtomicBool::new(true));
+        let token = isoray_job::CancelToken::new();
+        token.cancel();
         let opts = GroebnerOptions {
             budget: Budget {
-                interrupt: Some(flag),
+                interrupt: Some(token),
                 ..Default::default()
             },
             ..Default::default()

@@ -64,6 +64,9 @@ pub enum ImplicitError {
     /// Interpolation found no (verified) equation.
     #[error("interpolation failed: {0}")]
     Interpolation(String),
+    /// Interpolation was cancelled through its token.
+    #[error("cancelled")]
+    Cancelled,
     /// The Gröbner computation stopped (time, work or interrupt).
     #[error(transparent)]
     Groebner(#[from] GroebnerError),

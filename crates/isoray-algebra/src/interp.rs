@@ -26,6 +26,8 @@ pub struct InterpolationOptions {
     pub max_degree: u32,
     /// Wall-clock limit.
     pub time: Option<std::time::Duration>,
+    /// Cancelled to stop (checked once per prime).
+    pub interrupt: Option<isoray_job::CancelToken>,
 }
 
 impl Default for InterpolationOptions {
@@ -33,6 +35,7 @@ impl Default for InterpolationOptions {
         InterpolationOptions {
             max_degree: 24,
             time: None,
+            interrupt: None,
         }
     }
 }
@@ -230,6 +233,9 @@ pub fn implicitize_interpolation(
         let mut acc: Option<(Vec<Int>, Int, usize)> = None; // residues, modulus, pivot (last nonzero)
         let mut attempts = 0;
         loop {
+            if opts.interrupt.as_ref().is_some_and(|c| c.is_cancelled()) {
+                return Err(ImplicitError::Cancelled);
+            }
             if let Some(t) = opts.time {
                 if start.elapsed() > t {
                     return Err(ImplicitError::Interpolation(format!(

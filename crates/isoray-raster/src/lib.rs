@@ -11,8 +11,10 @@
 //! ([`shading`]), with shadows from shadow buffers ([`shadow`]) or from the
 //! A-buffered environment map, and reflections and refractions from cube
 //! environment maps ([`envmap`]: Blinn–Newell, Z-buffered, A-buffered).
-//! [`compare`] measures an image against the ray tracer. It backs
-//! `isoray raster`.
+//! Materials, lights, optics and their formulas are `isoray-shade`'s, the
+//! ray tracer's shading model. It backs `isoray raster` (whose
+//! `--error-vs-raytrace` report, needing both renderers, lives in the
+//! command line).
 //!
 //! ```
 //! use isoray_raster::render::{raster, RasterOptions, ReflectionMethod, ShadowMethod};
@@ -57,7 +59,6 @@
 //! ```
 
 pub mod abuffer;
-pub mod compare;
 pub mod draw;
 pub mod envmap;
 pub mod pipeline;

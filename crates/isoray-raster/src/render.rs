@@ -20,7 +20,7 @@
 //! oriented by the vertex normals, so winding does not matter); transparent
 //! ones are not.
 //!
-//! **Shading** follows the ray tracer (`isoray_render`): at a reflective or
+//! **Shading** is the ray tracer's model (`isoray_shade`): at a reflective or
 //! transparent surface the light splits by the Fresnel equations into a
 //! reflected part, a transmitted part and the local (ambient and diffuse)
 //! part; local shading has emission, ambient and, per light, diffuse and
@@ -34,9 +34,9 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
-use isoray_render::optics::{fresnel, reflect, refract, split};
-use isoray_render::shade::Surface;
 use isoray_scene::{Projection, Scene};
+use isoray_shade::optics::{beer_lambert, interface, reflect, Split};
+use isoray_shade::{to_vec3, MaterialSample};
 use rayon::prelude::*;
 
 use crate::abuffer::{ABuffer, Fragment as AFragment, FragmentList};
@@ -269,7 +269,7 @@ impl Ctx<'_> {
     /// The material of triangle `t` at `p`, looked up a hair outside the
     /// surface: a face lying on a checker boundary (a floor at y = 0) would
     /// otherwise flip between the two materials with rounding.
-    fn surface_at(&self, t: usize, p: DVec3) -> Surface {
+    fn surface_at(&self, t: usize, p: DVec3) -> MaterialSample {
         let q = p + self.tris.face[t] * self.lookup_offset;
         *self.lighting.surface(self.tris.material[t] as usize, v3(q))
     }
@@ -316,7 +316,7 @@ impl Ctx<'_> {
     }
 
     /// Local shading of surface `s` at `p` (normal `n` facing `viewer`), with shadows.
-    fn local(&self, s: &Surface, p: DVec3, n: DVec3, viewer: DVec3, weight: Vec3) -> Vec3 {
+    fn local(&self, s: &MaterialSample, p: DVec3, n: DVec3, viewer: DVec3, weight: Vec3) -> Vec3 {
         let v = (viewer - p).normalize_or_zero();
         self.lighting
             .shade_lit(s, v3(p), v3(n), v3(v), weight, |i, l, d| self.visibility(i, p, n, l, d))
@@ -324,19 +324,10 @@ impl Ctx<'_> {
 
     /// The Fresnel split at surface `s` for a ray arriving along `d` at unit
     /// normal `n` (facing the ray), entering (`inside` false) or leaving the object.
-    fn split_at(&self, s: &Surface, d: DVec3, n: DVec3, inside: bool) -> (isoray_render::optics::Split, Option<DVec3>) {
+    fn split_at(&self, s: &MaterialSample, d: DVec3, n: DVec3, inside: bool) -> (Split, Option<DVec3>) {
         let (n1, n2) = if inside { (s.ior, 1.0) } else { (1.0, s.ior) };
-        let cos1 = (-n.dot(d)) as f32;
-        let t = if s.transparency > 0.0 {
-            refract(v3(d), v3(n), n1 / n2).map(|t| t.as_dvec3())
-        } else {
-            None
-        };
-        let f = fresnel(s.fresnel, cos1, n1, n2);
-        (
-            split(s.reflectivity, s.transparency, f, s.transparency > 0.0 && t.is_none()),
-            t,
-        )
+        let at = interface(s, v3(d), v3(n), (-n.dot(d)) as f32, n1, n2);
+        (at.split, at.refracted.map(|t| t.as_dvec3()))
     }
 
     /// The colour of the surface found by a map lookup: triangle `tri` at
@@ -391,7 +382,7 @@ impl Ctx<'_> {
     }
 
     /// The light arriving at `p` along the refracted direction `t` into object `obj` (material `s`).
-    fn refraction(&self, obj: u32, s: &Surface, p: DVec3, n: DVec3, t: DVec3) -> Vec3 {
+    fn refraction(&self, obj: u32, s: &MaterialSample, p: DVec3, n: DVec3, t: DVec3) -> Vec3 {
         let tris = self.tris;
         match self.opts.reflections {
             ReflectionMethod::None => Vec3::ZERO,
@@ -432,7 +423,7 @@ impl Ctx<'_> {
                     ) else {
                         return weight * self.sky(d);
                     };
-                    weight *= (-s.absorption * (h.point - o).length() as f32).exp();
+                    weight *= beer_lambert(s.absorption, (h.point - o).length() as f32);
                     let k = h.tri as usize;
                     let out_n = self.tris.normal(k, self.tris.barycentric(k, h.point)).as_dvec3();
                     let inward = -out_n;
@@ -550,7 +541,7 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
         amap,
         zmap,
         object_maps,
-        background: Vec3::from(scene.render.background.map(|c| c as f32)),
+        background: to_vec3(scene.render.background),
         lookup_offset: 1e-5 * tris.radius_from((tris.bounds[0] + tris.bounds[1]) * 0.5) + 1e-9,
     };
 

@@ -1,13 +1,15 @@
 //! Local illumination for the polygon pipeline, with the ray tracer's
-//! formulas ([`isoray_render::shade`]): emission + ambient + Σ over lights of
+//! shading model ([`isoray_shade`]): emission + ambient + Σ over lights of
 //! colour × intensity × attenuation × visibility × (diffuse + specular),
-//! without ambient occlusion. Area lights are lit from their centre point.
-//! Visibility (shadows) comes from the caller: shadow buffers or the
-//! A-buffered environment map.
+//! without ambient occlusion. Area lights are lit from their centre point
+//! ([`isoray_shade::lights::incident`]). Visibility (shadows) comes from the
+//! caller: shadow buffers or the A-buffered environment map.
 
 use glam::Vec3;
-use isoray_render::shade::{direct_parts, Surface};
-use isoray_scene::{LightKind, Scene};
+use isoray_scene::Scene;
+use isoray_shade::lights::{self, Incident};
+use isoray_shade::material::checker;
+use isoray_shade::{phong, to_vec3, MaterialSample};
 
 /// How polygons are shaded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -25,12 +27,8 @@ pub enum Shading {
 #[derive(Debug, Clone)]
 pub struct Lighting<'s> {
     scene: &'s Scene,
-    surfaces: Vec<Surface>,
+    surfaces: Vec<MaterialSample>,
     eye: Vec3,
-}
-
-fn v3(a: [f64; 3]) -> Vec3 {
-    Vec3::new(a[0] as f32, a[1] as f32, a[2] as f32)
 }
 
 impl<'s> Lighting<'s> {
@@ -38,20 +36,14 @@ impl<'s> Lighting<'s> {
     pub fn new(scene: &'s Scene) -> Self {
         Lighting {
             scene,
-            surfaces: scene.materials.iter().map(Surface::from).collect(),
-            eye: v3(scene.camera.position),
+            surfaces: scene.materials.iter().map(MaterialSample::from).collect(),
+            eye: to_vec3(scene.camera.position),
         }
     }
 
     /// The surface of material `m` at world point `p` (checkers applied).
-    pub fn surface(&self, m: usize, p: Vec3) -> &Surface {
-        if let Some((other, size)) = self.scene.materials[m].checker {
-            let inv = 1.0 / size as f32;
-            let cell = (p.x * inv).floor() + (p.y * inv).floor() + (p.z * inv).floor();
-            if (cell as i64).rem_euclid(2) == 1 {
-                return &self.surfaces[other];
-            }
-        }
+    pub fn surface(&self, m: usize, p: Vec3) -> &MaterialSample {
+        let m = checker(&self.scene.materials[m], p).unwrap_or(m);
         &self.surfaces[m]
     }
 
@@ -62,23 +54,10 @@ impl<'s> Lighting<'s> {
     }
 
     /// The direction toward light `i` from `p` (unit), the distance to it
-    /// (infinite for directional lights) and its attenuation there.
-    pub fn light_at(&self, i: usize, p: Vec3) -> (Vec3, f32, f32) {
-        let light = &self.scene.lights[i];
-        let (l, dist) = match light.kind {
-            LightKind::Directional { direction } => (v3(direction).normalize_or_zero(), f32::INFINITY),
-            LightKind::Point { position } | LightKind::Sphere { position, .. } | LightKind::Rect { position, .. } => {
-                let d = v3(position) - p;
-                (d.normalize_or_zero(), d.length())
-            }
-        };
-        let a = light.attenuation;
-        let att = if dist.is_finite() {
-            1.0 / (a[0] as f32 + a[1] as f32 * dist + a[2] as f32 * dist * dist).max(1e-12)
-        } else {
-            1.0
-        };
-        (l, dist, att)
+    /// (infinite for directional lights) and its attenuation there, area
+    /// lights seen at their centre ([`lights::incident`]).
+    pub fn light_at(&self, i: usize, p: Vec3) -> Incident {
+        lights::incident(&self.scene.lights[i], p)
     }
 
     /// The ray tracer's local shading of surface `s` at `p` (unit normal
@@ -89,16 +68,20 @@ impl<'s> Lighting<'s> {
     /// light's visibility (shadows; 1 without).
     pub fn shade_lit(
         &self,
-        s: &Surface,
+        s: &MaterialSample,
         p: Vec3,
         n: Vec3,
         v: Vec3,
         local: Vec3,
         visibility: impl Fn(usize, Vec3, f32) -> f32,
     ) -> Vec3 {
-        let mut c = s.emission + local * s.ambient;
+        let mut c = phong::emitted_and_ambient(s, local, 1.0);
         for (i, light) in self.scene.lights.iter().enumerate() {
-            let (l, dist, att) = self.light_at(i, p);
+            let Incident {
+                dir: l,
+                dist,
+                attenuation,
+            } = self.light_at(i, p);
             if n.dot(l) <= 0.0 {
                 continue;
             }
@@ -106,9 +89,8 @@ impl<'s> Lighting<'s> {
             if vis <= 0.0 {
                 continue;
             }
-            let radiance = v3(light.color) * light.intensity as f32;
-            let (diffuse, specular) = direct_parts(s, n, v, l);
-            c += radiance * att * vis * (local * diffuse + specular);
+            let arriving = lights::radiance(light, 1) * attenuation * vis;
+            c += phong::direct_light(s, n, v, l, local, arriving);
         }
         c
     }

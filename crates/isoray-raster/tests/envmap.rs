@@ -235,8 +235,10 @@ fn the_a_buffered_map_reflects_what_the_camera_cannot_see() {
     let amap = render(ReflectionMethod::ABufferMap);
     if let Some(dir) = std::env::var_os("ISORAY_TEST_OUT") {
         let dir = std::path::PathBuf::from(dir);
-        isoray_render::output::write_png(&dir.join("hidden-zmap.png"), 160, 120, &zmap).unwrap();
-        isoray_render::output::write_png(&dir.join("hidden-amap.png"), 160, 120, &amap).unwrap();
+        for (name, rgb) in [("hidden-zmap.png", &zmap), ("hidden-amap.png", &amap)] {
+            let bytes = isoray_shade::srgb::to_srgb8(rgb);
+            image::save_buffer(dir.join(name), &bytes, 160, 120, image::ColorType::Rgb8).unwrap();
+        }
     }
 
     // Classify the mirror's pixels by where their exact reflected ray meets the green plane.

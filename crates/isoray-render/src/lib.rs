@@ -3,8 +3,9 @@
 //! The CPU sphere tracer of isoray. Rays are traced in tiles of
 //! [`TILE`]×[`TILE`] pixels, each tile as a wavefront: every sphere-tracing
 //! step evaluates all active rays of the tile with one batch call of the
-//! shape tape. Shading is Phong/Blinn-Phong with hard, soft or improved soft
-//! shadows and ambient occlusion; antialiasing is aa×aa supersampling.
+//! shape tape. Shading is `isoray-shade`'s Phong/Blinn-Phong model, with
+//! hard, soft or improved soft shadows and ambient occlusion, and its optics
+//! for reflected and refracted rays; antialiasing is aa×aa supersampling.
 //! Colours are linear inside; sRGB happens once, when a PNG is written.
 //!
 //! Tiles run in parallel with rayon, and every pixel is computed the same way
@@ -28,22 +29,20 @@
 
 pub mod bounds;
 pub mod camera;
-pub mod lights;
-pub mod optics;
 pub mod output;
-pub mod shade;
 pub mod trace;
 mod whitted;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::Vec3;
-use isoray_scene::{LightKind, NormalMethod, Scene, ShadowMode, View};
+use isoray_scene::{NormalMethod, Scene, ShadowMode, View};
+use isoray_shade::material::{blend_weight, checker, smooth_min};
+use isoray_shade::{lights, phong, to_vec3, MaterialSample};
 use isoray_shape::GradientMode;
 use rayon::prelude::*;
 
 use camera::RayCamera;
-use shade::Surface;
 use trace::{shadow_march, sphere_trace, sphere_trace_capped, Field, Hit, Rays, Scratch};
 
 /// Tile edge in pixels.
@@ -210,9 +209,9 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> (RenderedImage, Stats) {
 struct Ctx<'s> {
     scene: &'s Scene,
     cam: RayCamera,
-    surfaces: Vec<Surface>,
+    surfaces: Vec<MaterialSample>,
     /// Every material as a surface, by material index (for checkers).
-    material_surfaces: Vec<Surface>,
+    material_surfaces: Vec<MaterialSample>,
     gradient: GradientMode,
 }
 
@@ -228,9 +227,9 @@ impl<'s> Ctx<'s> {
         let surfaces = scene
             .objects
             .iter()
-            .map(|o| Surface::from(&scene.materials[o.material]))
+            .map(|o| MaterialSample::from(&scene.materials[o.material]))
             .collect();
-        let material_surfaces = scene.materials.iter().map(Surface::from).collect();
+        let material_surfaces = scene.materials.iter().map(MaterialSample::from).collect();
         Ctx {
             scene,
             cam,
@@ -401,7 +400,7 @@ impl<'s> Worker<'s> {
             }
         }
         let (hs, mut evals) = self.trace_and_normals(ctx, false);
-        let mut samples = vec![Vec3::from(s.background.map(|c| c as f32)); self.rays.len()];
+        let mut samples = vec![to_vec3(s.background); self.rays.len()];
         match s.view {
             View::Steps => {
                 for (i, h) in self.hits.iter().enumerate() {
@@ -471,7 +470,7 @@ impl<'s> Worker<'s> {
         &mut self,
         ctx: &Ctx,
         hs: &HitSet,
-        surfaces: &[Surface],
+        surfaces: &[MaterialSample],
         local: &[Vec3],
         media: &[whitted::Media],
         seeds: &[u32],
@@ -493,7 +492,7 @@ impl<'s> Worker<'s> {
         let pos = |k: usize| Vec3::new(hs.px[k], hs.py[k], hs.pz[k]);
         let nrm = |k: usize| Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]);
         let mut color: Vec<Vec3> = (0..m)
-            .map(|k| surfaces[k].emission + local[k] * surfaces[k].ambient * ao[k])
+            .map(|k| phong::emitted_and_ambient(&surfaces[k], local[k], ao[k]))
             .collect();
 
         let mut shadow_rays = Rays::default();
@@ -510,22 +509,19 @@ impl<'s> Worker<'s> {
             .iter()
             .enumerate()
             .flat_map(|(li, light)| {
-                let n = match light.kind {
-                    LightKind::Sphere { .. } | LightKind::Rect { .. } => light.samples,
-                    _ => 1,
-                };
+                let n = lights::sample_count(light);
                 (0..n).map(move |j| (li, j, n))
             })
             .collect();
         for (li, j, n) in passes {
             let light = &scene.lights[li];
-            let area = n > 1 || matches!(light.kind, LightKind::Sphere { .. } | LightKind::Rect { .. });
+            let area = n > 1 || lights::is_area(light);
             let mode = if area && s.shadows != ShadowMode::None {
                 ShadowMode::Hard
             } else {
                 s.shadows
             };
-            let radiance = Vec3::from(light.color.map(|c| c as f32)) * (light.intensity as f32 / n as f32);
+            let radiance = lights::radiance(light, n);
             shadow_rays.clear();
             tmax.clear();
             which.clear();
@@ -536,21 +532,19 @@ impl<'s> Worker<'s> {
             let mut atten = Vec::with_capacity(m);
             for (k, &md) in media.iter().enumerate().take(m) {
                 let p = pos(k);
-                let (l, dist) = lights::sample(
-                    &light.kind,
+                let lights::Incident {
+                    dir: l,
+                    dist,
+                    attenuation,
+                } = lights::sample(
+                    light,
                     p,
                     j,
                     n,
                     seeds[k].wrapping_add((li as u32).wrapping_mul(0x9E37_79B9)),
                 );
-                let a = light.attenuation;
-                let att = if dist.is_finite() {
-                    1.0 / (a[0] as f32 + a[1] as f32 * dist + a[2] as f32 * dist * dist).max(1e-12)
-                } else {
-                    1.0
-                };
                 dirs.push(l);
-                atten.push(att);
+                atten.push(attenuation);
                 if nrm(k).dot(l) > 0.0 {
                     which.push(k);
                     let o = p + nrm(k) * (2.0 * s.hit_epsilon as f32);
@@ -604,8 +598,8 @@ impl<'s> Worker<'s> {
                     sh = sh.powf(s.shadow_exponent as f32);
                 }
                 let through = transmitted.as_ref().map_or(Vec3::ONE, |t| t[r]);
-                let (diffuse, specular) = shade::direct_parts(&surfaces[k], nrm(k), v, dirs[k]);
-                color[k] += radiance * atten[k] * sh * through * (local[k] * diffuse + specular);
+                let arriving = radiance * atten[k] * sh * through;
+                color[k] += phong::direct_light(&surfaces[k], nrm(k), v, dirs[k], local[k], arriving);
             }
         }
         color
@@ -615,7 +609,13 @@ impl<'s> Worker<'s> {
     /// object's, or with `blend` > 0 a mix following the smooth union's blend
     /// factor (the object is then the closest one). For hits of rays inside
     /// objects (`unsigned`), the object whose surface is nearest, unblended.
-    fn materials(&mut self, ctx: &Ctx, hs: &HitSet, evals: &mut u64, unsigned: bool) -> (Vec<Surface>, Vec<usize>) {
+    fn materials(
+        &mut self,
+        ctx: &Ctx,
+        hs: &HitSet,
+        evals: &mut u64,
+        unsigned: bool,
+    ) -> (Vec<MaterialSample>, Vec<usize>) {
         let m = hs.idx.len();
         if self.object_evals.is_empty() {
             let obj = vec![0; m];
@@ -648,10 +648,8 @@ impl<'s> Worker<'s> {
                     obj[q] = j;
                 }
                 if k > 0.0 {
-                    let h = (0.5 + 0.5 * (a - b) / km).clamp(0.0, 1.0);
-                    out[q] = out[q].mix(&ctx.surfaces[j], h);
-                    let hh = (k - (a - b).abs()).max(0.0);
-                    acc_d[q] = a.min(b) - hh * hh * 0.25 / k;
+                    out[q] = out[q].mix(&ctx.surfaces[j], blend_weight(a, b, km));
+                    acc_d[q] = smooth_min(a, b, k);
                 } else if obj[q] == j {
                     out[q] = ctx.surfaces[j];
                     acc_d[q] = b;
@@ -663,15 +661,11 @@ impl<'s> Worker<'s> {
     }
 
     /// Objects whose material is a checker take the other material in odd cells.
-    fn apply_checkers(&self, ctx: &Ctx, hs: &HitSet, obj: &[usize], out: &mut [Surface]) {
+    fn apply_checkers(&self, ctx: &Ctx, hs: &HitSet, obj: &[usize], out: &mut [MaterialSample]) {
         let scene = ctx.scene;
         for (q, &o) in obj.iter().enumerate() {
-            let Some((other, size)) = scene.materials[scene.objects[o].material].checker else {
-                continue;
-            };
-            let inv = 1.0 / size as f32;
-            let cell = (hs.px[q] * inv).floor() + (hs.py[q] * inv).floor() + (hs.pz[q] * inv).floor();
-            if (cell as i64).rem_euclid(2) == 1 {
+            let material = &scene.materials[scene.objects[o].material];
+            if let Some(other) = checker(material, Vec3::new(hs.px[q], hs.py[q], hs.pz[q])) {
                 out[q] = ctx.material_surfaces[other];
             }
         }

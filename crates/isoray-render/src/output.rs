@@ -1,10 +1,12 @@
-//! Writing images: PNG (sRGB) and OpenEXR AOVs, always atomically: the data
-//! goes to a temporary file beside the target, which is renamed over it only
-//! when complete, so a failed write leaves any old file intact.
+//! Writing images: PNG (8-bit sRGB, encoded by [`isoray_shade::srgb`]) and
+//! OpenEXR AOVs, always atomically: the data goes to a temporary file beside
+//! the target, which is renamed over it only when complete, so a failed
+//! write leaves any old file intact.
 
 use std::path::{Path, PathBuf};
 
 use exr::prelude::*;
+use isoray_shade::srgb::to_srgb8;
 
 /// An output failure.
 #[derive(Debug, thiserror::Error)]
@@ -17,23 +19,6 @@ pub enum OutputError {
         /// What went wrong.
         message: String,
     },
-}
-
-/// The sRGB transfer function of a linear value in [0, 1].
-pub fn linear_to_srgb(x: f32) -> f32 {
-    let x = x.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// Linear RGB to 8-bit sRGB bytes.
-pub fn to_srgb8(rgb: &[[f32; 3]]) -> Vec<u8> {
-    rgb.iter()
-        .flat_map(|c| c.map(|v| (linear_to_srgb(v) * 255.0 + 0.5) as u8))
-        .collect()
 }
 
 fn temp_path(path: &Path) -> PathBuf {
@@ -124,15 +109,6 @@ pub fn write_exr_rgb(path: &Path, width: u32, height: u32, data: &[[f32; 3]]) ->
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn srgb_known_values() {
-        assert_eq!(linear_to_srgb(0.0), 0.0);
-        assert!((linear_to_srgb(1.0) - 1.0).abs() < 1e-6);
-        // 0.5 linear is 0.7354 in sRGB (188 in 8 bits).
-        assert!((linear_to_srgb(0.5) - 0.735_357).abs() < 1e-5);
-        assert_eq!(to_srgb8(&[[0.5, 0.0, 1.0]]), vec![188, 0, 255]);
-    }
 
     #[test]
     fn failed_write_keeps_old_file() {

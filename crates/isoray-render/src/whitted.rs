@@ -11,10 +11,10 @@
 //! Beer–Lambert, exp(−σ·length).
 
 use glam::Vec3;
+use isoray_shade::lights::hash;
+use isoray_shade::optics::{beer_lambert, interface, reflect};
+use isoray_shade::{to_vec3, MaterialSample};
 
-use crate::lights::hash;
-use crate::optics::{fresnel, reflect, refract, split};
-use crate::shade::Surface;
 use crate::trace::{sphere_trace, Hit, Rays};
 use crate::{Ctx, HitSet, Worker};
 
@@ -93,7 +93,7 @@ impl Worker<'_> {
     /// Returns the evaluations spent.
     pub(crate) fn trace_paths(&mut self, ctx: &Ctx, hs: HitSet, samples: &mut [Vec3]) -> u64 {
         let s = &ctx.scene.render;
-        let background = Vec3::from(s.background.map(|c| c as f32));
+        let background = to_vec3(s.background);
         let n = self.rays.len();
         samples.iter_mut().for_each(|x| *x = Vec3::ZERO);
         let mut evals = 0;
@@ -131,7 +131,7 @@ impl Worker<'_> {
                         if let Some(o) = packet.media[i].top() {
                             let sigma = ctx.surfaces[o].absorption;
                             let length = (Vec3::new(hs.px[k], hs.py[k], hs.pz[k]) - packet.from[i]).length();
-                            packet.weight[i] *= (-sigma * length).exp();
+                            packet.weight[i] *= beer_lambert(sigma, length);
                         }
                     }
                 }
@@ -155,7 +155,7 @@ impl Worker<'_> {
                 let mut local = vec![Vec3::ONE; m];
                 for k in 0..m {
                     let i = hs.idx[k];
-                    let surf: &Surface = &surfaces[k];
+                    let surf: &MaterialSample = &surfaces[k];
                     if !surf.is_optical() {
                         continue;
                     }
@@ -175,19 +175,8 @@ impl Worker<'_> {
                         }
                     }
                     let n2 = after.top().map_or(1.0, |t| ctx.surfaces[t].ior);
-                    let cos1 = -nrm.dot(d);
-                    let transmitted = if surf.transparency > 0.0 {
-                        refract(d, nrm, n1 / n2)
-                    } else {
-                        None
-                    };
-                    let f = fresnel(surf.fresnel, cos1, n1, n2);
-                    let sp = split(
-                        surf.reflectivity,
-                        surf.transparency,
-                        f,
-                        surf.transparency > 0.0 && transmitted.is_none(),
-                    );
+                    let at = interface(surf, d, nrm, -nrm.dot(d), n1, n2);
+                    let (sp, transmitted) = (at.split, at.refracted);
                     local[k] = sp.local;
                     if depth == s.max_depth {
                         continue;
@@ -250,10 +239,7 @@ impl Worker<'_> {
         let mut active: Vec<usize> = (0..n).collect();
         let mut evals = 0;
         let mut hits: Vec<Hit> = Vec::new();
-        let clear_of = |obj: usize| {
-            let m = &ctx.surfaces[obj];
-            Vec3::splat(m.transparency) * (Vec3::ONE - m.reflectivity)
-        };
+        let clear_of = |obj: usize| ctx.surfaces[obj].interface_transmittance();
         for _ in 0..MAX_SHADOW_SEGMENTS {
             if active.is_empty() {
                 break;
@@ -286,7 +272,7 @@ impl Worker<'_> {
                     if hits[r].t >= left[i] {
                         // No further interface before the light (inside: absorb the rest).
                         if let Some(top) = media[i].top() {
-                            out[i] *= (-ctx.surfaces[top].absorption * left[i].min(1e4)).exp();
+                            out[i] *= beer_lambert(ctx.surfaces[top].absorption, left[i].min(1e4));
                         }
                     }
                 }
@@ -294,7 +280,7 @@ impl Worker<'_> {
                 for ((i, p, t), obj) in pts.into_iter().zip(objs) {
                     if let Some(top) = media[i].top() {
                         // The segment began `off` before the traced origin (the step past the interface).
-                        out[i] *= (-ctx.surfaces[top].absorption * (t + off)).exp();
+                        out[i] *= beer_lambert(ctx.surfaces[top].absorption, t + off);
                     }
                     if media[i].contains(obj) {
                         media[i].remove(obj);

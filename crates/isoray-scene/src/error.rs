@@ -21,6 +21,25 @@ pub struct SceneError {
     pub rendered: String,
     /// True when the error is an I/O failure rather than bad input.
     pub io: bool,
+    /// True when the load was cancelled (see `LoadOptions::cancel`).
+    pub cancelled: bool,
+    /// The dotted key the error is about (`render.aa`, `light.0.intensity`),
+    /// when it is about one: for an editor to show the error at its field.
+    pub key: Option<String>,
+    /// The bytes of the file the error points at, when it points into it.
+    pub span: Option<Span>,
+    /// A short label for the place (shown under the caret).
+    pub label: Option<String>,
+    /// Notes and help lines.
+    pub notes: Vec<String>,
+}
+
+impl SceneError {
+    /// The error, about the dotted key `key`.
+    pub fn with_key(mut self, key: impl Into<String>) -> SceneError {
+        self.key = Some(key.into());
+        self
+    }
 }
 
 /// The texts errors can point into.
@@ -64,6 +83,11 @@ impl Sources {
                     column: Some(start + 1),
                     rendered: rendered.trim_end().to_string(),
                     io: false,
+                    cancelled: false,
+                    key: None,
+                    span: None,
+                    label: label.map(str::to_string),
+                    notes: notes.to_vec(),
                 }
             }
             Origin::Implicit => {
@@ -78,6 +102,11 @@ impl Sources {
                     column: None,
                     rendered,
                     io: false,
+                    cancelled: false,
+                    key: None,
+                    span: None,
+                    label: label.map(str::to_string),
+                    notes: notes.to_vec(),
                 }
             }
         }
@@ -94,6 +123,11 @@ impl Sources {
             column: Some(col),
             rendered: rendered.trim_end().to_string(),
             io: false,
+            cancelled: false,
+            key: None,
+            span: Some(span),
+            label: label.map(str::to_string),
+            notes: notes.to_vec(),
         }
     }
 }
@@ -109,6 +143,11 @@ impl SceneError {
             line: None,
             column: None,
             io: false,
+            cancelled: false,
+            key: None,
+            span: None,
+            label: None,
+            notes: Vec::new(),
         }
     }
 
@@ -122,6 +161,11 @@ impl SceneError {
             line: None,
             column: None,
             io: true,
+            cancelled: false,
+            key: None,
+            span: None,
+            label: None,
+            notes: Vec::new(),
         }
     }
 }

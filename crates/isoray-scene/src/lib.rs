@@ -24,7 +24,10 @@ pub mod env;
 mod error;
 mod load;
 mod model;
+mod save;
+pub mod schema;
 
 pub use error::{SceneError, Sources};
-pub use load::{load, load_str, load_str_with, load_with, LoadOptions, RENDER_KEYS};
+pub use load::{load, load_str, load_str_with, load_with, LoadOptions};
 pub use model::*;
+pub use save::{edit_text, set_file, write_atomic, SetReport};

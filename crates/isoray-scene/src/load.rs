@@ -26,6 +26,9 @@ pub struct LoadOptions {
     /// loads: a surface already derived for the same content and values is
     /// not derived again.
     pub analyses: Option<isoray_shape::Analyses>,
+    /// Stops a load in a long surface analysis (implicitization); the
+    /// load then fails with [`SceneError::cancelled`] set.
+    pub cancel: Option<isoray_job::CancelToken>,
 }
 
 /// Reads and loads a scene file, applying `--set KEY=VALUE` overrides.
@@ -67,7 +70,13 @@ pub fn load_str_with(text: &str, name: &str, overrides: &[String], options: &Loa
     for (i, ov) in overrides.iter().enumerate() {
         apply_override(&src, &mut root, i, ov)?;
     }
-    build(&src, &root, options)
+    let scene = build(&src, &root, options);
+    if options.cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
+        let mut e = SceneError::usage(format!("loading `{name}` was cancelled"));
+        e.cancelled = true;
+        return Err(e);
+    }
+    scene
 }
 
 const TOP_KEYS: &[&str] = &[
@@ -223,7 +232,7 @@ fn is_param_spec(v: &Located) -> bool {
 }
 
 /// Reads the keys of one table, remembering which were used.
-struct Reader<'a> {
+pub(crate) struct Reader<'a> {
     src: &'a Sources,
     entries: &'a [Entry],
     ctx: String,
@@ -255,15 +264,17 @@ impl<'a> Reader<'a> {
     }
 
     fn err(&self, v: &Located, key: &str, expected: &str) -> SceneError {
-        self.src.error(
-            v.origin,
-            format!("`{}.{key}`: expected {expected}, found {}", self.ctx, describe(&v.item)),
-            Some(&format!("expected {expected}")),
-            &[],
-        )
+        self.src
+            .error(
+                v.origin,
+                format!("`{}.{key}`: expected {expected}, found {}", self.ctx, describe(&v.item)),
+                Some(&format!("expected {expected}")),
+                &[],
+            )
+            .with_key(format!("{}.{key}", self.ctx))
     }
 
-    fn num_in(&mut self, key: &str, default: f64, ok: impl Fn(f64) -> bool, expected: &str) -> Result<f64> {
+    pub(crate) fn num_in(&mut self, key: &str, default: f64, ok: impl Fn(f64) -> bool, expected: &str) -> Result<f64> {
         let Some(v) = self.get(key) else {
             return Ok(default);
         };
@@ -281,7 +292,7 @@ impl<'a> Reader<'a> {
         self.num_in(key, default, |x| x.is_finite() && x >= 0.0, "a number ≥ 0")
     }
 
-    fn int(&mut self, key: &str, default: u32, lo: u32, hi: u32) -> Result<u32> {
+    pub(crate) fn int(&mut self, key: &str, default: u32, lo: u32, hi: u32) -> Result<u32> {
         let Some(v) = self.get(key) else {
             return Ok(default);
         };
@@ -296,7 +307,7 @@ impl<'a> Reader<'a> {
         self.boolean(key, false)
     }
 
-    fn boolean(&mut self, key: &str, default: bool) -> Result<bool> {
+    pub(crate) fn boolean(&mut self, key: &str, default: bool) -> Result<bool> {
         let Some(v) = self.get(key) else {
             return Ok(default);
         };
@@ -351,7 +362,7 @@ impl<'a> Reader<'a> {
         }
     }
 
-    fn color(&mut self, key: &str, default: Vec3) -> Result<Vec3> {
+    pub(crate) fn color(&mut self, key: &str, default: Vec3) -> Result<Vec3> {
         let c = self.vec3(key, default)?;
         if c.iter().any(|x| *x < 0.0) {
             let v = self.get(key).expect("just read");
@@ -370,7 +381,7 @@ impl<'a> Reader<'a> {
         }
     }
 
-    fn choice<T: Copy>(&mut self, key: &str, options: &[(&str, T)], default: T) -> Result<T> {
+    pub(crate) fn choice<T: Copy>(&mut self, key: &str, options: &[(&str, T)], default: T) -> Result<T> {
         let Some((s, v)) = self.string(key)? else {
             return Ok(default);
         };
@@ -382,48 +393,57 @@ impl<'a> Reader<'a> {
         if let Some(sg) = suggest(s, options.iter().map(|(n, _)| *n)) {
             notes.push(format!("did you mean \"{sg}\"?"));
         }
-        Err(self.src.error(
-            v.origin,
-            format!(
-                "`{}.{key}`: expected one of {}, found \"{s}\"",
-                self.ctx,
-                names.join(", ")
-            ),
-            Some("unknown choice"),
-            &notes,
-        ))
+        Err(self
+            .src
+            .error(
+                v.origin,
+                format!(
+                    "`{}.{key}`: expected one of {}, found \"{s}\"",
+                    self.ctx,
+                    names.join(", ")
+                ),
+                Some("unknown choice"),
+                &notes,
+            )
+            .with_key(format!("{}.{key}", self.ctx)))
     }
 
     /// Errors on keys that were never read.
     fn finish(self, known: &[&str]) -> Result<()> {
         for (e, used) in self.entries.iter().zip(&self.used) {
             if !used && known.contains(&e.key.as_str()) {
-                return Err(self.src.error(
-                    e.key_origin,
-                    format!("`{}.{}` does not apply here", self.ctx, e.key),
-                    Some("not used with these settings"),
-                    &[match e.key.as_str() {
-                        "direction" => {
-                            "`direction` is for directional lights; point lights have a `position`".to_string()
-                        }
-                        "position" => {
-                            "`position` is for point lights; directional lights have a `direction`".to_string()
-                        }
-                        _ => "remove it, or change the setting that makes it unused".to_string(),
-                    }],
-                ));
+                return Err(self
+                    .src
+                    .error(
+                        e.key_origin,
+                        format!("`{}.{}` does not apply here", self.ctx, e.key),
+                        Some("not used with these settings"),
+                        &[match e.key.as_str() {
+                            "direction" => {
+                                "`direction` is for directional lights; point lights have a `position`".to_string()
+                            }
+                            "position" => {
+                                "`position` is for point lights; directional lights have a `direction`".to_string()
+                            }
+                            _ => "remove it, or change the setting that makes it unused".to_string(),
+                        }],
+                    )
+                    .with_key(format!("{}.{}", self.ctx, e.key)));
             }
             if !used {
                 let mut notes = vec![format!("known keys: {}", known.join(", "))];
                 if let Some(s) = suggest(&e.key, known.iter().copied()) {
                     notes.insert(0, format!("did you mean `{s}`?"));
                 }
-                return Err(self.src.error(
-                    e.key_origin,
-                    format!("unknown key `{}` in `{}`", e.key, self.ctx),
-                    Some("unknown key"),
-                    &notes,
-                ));
+                return Err(self
+                    .src
+                    .error(
+                        e.key_origin,
+                        format!("unknown key `{}` in `{}`", e.key, self.ctx),
+                        Some("unknown key"),
+                        &notes,
+                    )
+                    .with_key(format!("{}.{}", self.ctx, e.key)));
             }
         }
         Ok(())
@@ -454,8 +474,74 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     };
     let mut top = Reader::new(src, &root_item, "scene")?;
 
+    // Shape text snippets: source id → (text, byte map into the file or override).
+    let mut snippets: Vec<(&Located, &[usize])> = Vec::new();
+    let shape_error = |snips: &[(&Located, &[usize])], d: Diagnostic| -> SceneError {
+        let Some((loc, map)) = snips.get(d.source) else {
+            return src.error(Origin::Implicit, d.message.clone(), None, &d.notes);
+        };
+        let at = |i: usize| map.get(i).copied().unwrap_or_else(|| map.last().copied().unwrap_or(0));
+        match loc.origin {
+            Origin::File(_) => {
+                let span = Span::new(at(d.span.start), at(d.span.end.max(d.span.start)));
+                src.error_at(span, &d.message, d.label.as_deref(), &d.notes)
+            }
+            o => {
+                let mut notes = d.notes.clone();
+                notes.insert(0, format!("at byte {} of the value", d.span.start));
+                src.error(o, d.message.clone(), d.label.as_deref(), &notes)
+            }
+        }
+    };
+
+    // [params]
+    let mut lib = Library::new();
+    lib.set_time(options.time);
+    if let Some(cache) = &options.analyses {
+        lib.use_analyses(cache.clone());
+    }
+    if let Some(token) = &options.cancel {
+        lib.set_cancel(token.clone());
+    }
+    let mut params = Vec::new();
+    let mut surface_materials: Vec<(String, usize)> = Vec::new();
+    let mut param_ranges: Vec<ParamRange> = Vec::new();
+    if let Some(v) = top.get("params") {
+        let Item::Table(entries) = &v.item else {
+            return Err(src.error(
+                v.origin,
+                "`params` must be a table of named numbers or vectors",
+                None,
+                &[],
+            ));
+        };
+        for e in entries {
+            let key = format!("params.{}", e.key);
+            let val = param_spec(src, &e.value, &key, &mut param_ranges)?;
+            check_name(src, &e.key, e.key_origin)?;
+            if e.key == "t" {
+                return Err(src.error(
+                    e.key_origin,
+                    "`params.t`: `t` is the built-in time in shape text",
+                    Some("choose another name"),
+                    &["shape text reads the time (seconds, `--time`) as `t`".into()],
+                ));
+            }
+            lib.set_param(&e.key, val);
+            params.push((e.key.clone(), val));
+        }
+    }
+
     // [camera]
-    let camera = match top.get("camera") {
+    let mut driven: Vec<Driven> = Vec::new();
+    let camera_table = match top.get("camera") {
+        Some(v) => Some(
+            resolve_exprs(src, &lib, v, "camera", CAMERA_EXPR, &mut snippets, &mut driven)
+                .map_err(|e| e.into_scene(&snippets, &shape_error))?,
+        ),
+        None => None,
+    };
+    let camera = match camera_table.as_ref() {
         Some(v) => {
             let mut r = Reader::new(src, v, "camera")?;
             let position = r.vec3("position", [0.0, 0.0, 5.0])?;
@@ -523,83 +609,14 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     };
 
     // [render]
-    let d = RenderSettings::default();
     let render = match top.get("render") {
         Some(v) => {
             let mut r = Reader::new(src, v, "render")?;
-            let s = RenderSettings {
-                width: r.int("width", d.width, 1, 16384)?,
-                height: r.int("height", d.height, 1, 16384)?,
-                aa: r.int("aa", d.aa, 1, 16)?,
-                max_steps: r.int("max_steps", d.max_steps, 1, 100_000)?,
-                hit_epsilon: r.positive("hit_epsilon", d.hit_epsilon)?,
-                relative_epsilon: r.boolean("relative_epsilon", d.relative_epsilon)?,
-                max_distance: r.positive("max_distance", d.max_distance)?,
-                step_scale: r.num_in(
-                    "step_scale",
-                    d.step_scale,
-                    |x| x > 0.0 && x <= 2.0,
-                    "a step scale in (0, 2]",
-                )?,
-                normals: r.choice(
-                    "normals",
-                    &[
-                        ("central", NormalMethod::Central),
-                        ("forward", NormalMethod::Forward),
-                        ("tetrahedron", NormalMethod::Tetrahedron),
-                        ("analytic", NormalMethod::Analytic),
-                    ],
-                    d.normals,
-                )?,
-                normal_epsilon: r.positive("normal_epsilon", d.normal_epsilon)?,
-                shadows: r.choice(
-                    "shadows",
-                    &[
-                        ("none", ShadowMode::None),
-                        ("hard", ShadowMode::Hard),
-                        ("soft", ShadowMode::Soft),
-                        ("improved", ShadowMode::Improved),
-                    ],
-                    d.shadows,
-                )?,
-                shadow_exponent: r.positive("shadow_exponent", d.shadow_exponent)?,
-                shadow_start: r.non_negative("shadow_start", d.shadow_start)?,
-                shadow_max_distance: r.positive("shadow_max_distance", d.shadow_max_distance)?,
-                shadow_max_steps: r.int("shadow_max_steps", d.shadow_max_steps, 1, 100_000)?,
-                ao: r.boolean("ao", d.ao)?,
-                ao_samples: r.int("ao_samples", d.ao_samples, 1, 64)?,
-                ao_step: r.positive("ao_step", d.ao_step)?,
-                ao_intensity: r.non_negative("ao_intensity", d.ao_intensity)?,
-                background: r.color("background", d.background)?,
-                blend: r.non_negative("blend", d.blend)?,
-                material_blend: r.num_in(
-                    "material_blend",
-                    d.material_blend,
-                    |x| x > 0.0 && x <= 1.0,
-                    "a fraction in (0, 1]",
-                )?,
-                view: r.choice(
-                    "view",
-                    &[
-                        ("shaded", View::Shaded),
-                        ("steps", View::Steps),
-                        ("normals", View::Normals),
-                    ],
-                    d.view,
-                )?,
-                max_depth: r.int("max_depth", d.max_depth, 0, 64)?,
-                min_weight: r.num_in(
-                    "min_weight",
-                    d.min_weight,
-                    |x| (0.0..1.0).contains(&x),
-                    "a number from 0 to below 1",
-                )?,
-                analytic: r.boolean("analytic", d.analytic)?,
-            };
-            r.finish(RENDER_KEYS)?;
+            let s = RenderSettings::read(&mut r)?;
+            r.finish(&crate::schema::names(&render_keys()))?;
             s
         }
-        None => d,
+        None => RenderSettings::default(),
     };
 
     // [[light]]
@@ -621,7 +638,11 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
             }
         };
         for (i, lv) in items.into_iter().enumerate() {
-            let mut r = Reader::new(src, lv, &format!("light.{i}"))?;
+            let ctx = format!("light.{i}");
+            let resolved = resolve_exprs(src, &lib, lv, &ctx, LIGHT_EXPR, &mut snippets, &mut driven)
+                .map_err(|e| e.into_scene(&snippets, &shape_error))?;
+            let lv = &resolved;
+            let mut r = Reader::new(src, lv, &ctx)?;
             let kind_name = r.choice(
                 "kind",
                 &[("directional", 0), ("point", 1), ("sphere", 2), ("rect", 3)],
@@ -703,7 +724,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     }
 
     // [material.NAME]
-    let mut pending_checkers: Vec<(String, String, &Located, f64)> = Vec::new();
+    let mut pending_checkers: Vec<(String, String, Located, f64)> = Vec::new();
     let mut materials = vec![Material::default_named("default")];
     if let Some(v) = top.get("material") {
         let Item::Table(entries) = &v.item else {
@@ -715,7 +736,10 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
             ));
         };
         for e in entries {
-            let mut r = Reader::new(src, &e.value, &format!("material.{}", e.key))?;
+            let ctx = format!("material.{}", e.key);
+            let resolved = resolve_exprs(src, &lib, &e.value, &ctx, MATERIAL_EXPR, &mut snippets, &mut driven)
+                .map_err(|e| e.into_scene(&snippets, &shape_error))?;
+            let mut r = Reader::new(src, &resolved, &ctx)?;
             let d = Material::default_named(&e.key);
             let m = Material {
                 name: e.key.clone(),
@@ -756,7 +780,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
             };
             let checker_size = r.positive("checker_size", 1.0)?;
             if let Some((other, loc)) = r.string("checker")? {
-                pending_checkers.push((e.key.clone(), other.to_string(), loc, checker_size));
+                pending_checkers.push((e.key.clone(), other.to_string(), loc.clone(), checker_size));
             } else if let Some(v) = r.get("checker_size") {
                 return Err(src.error(
                     v.origin,
@@ -775,64 +799,9 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     }
     // Checkers name other materials, defined before or after.
     for (name, other, loc, size) in pending_checkers {
-        let k = material_index(src, &materials, &other, loc, &format!("material.{name}.checker"))?;
+        let k = material_index(src, &materials, &other, &loc, &format!("material.{name}.checker"))?;
         if let Some(m) = materials.iter_mut().find(|x| x.name == name) {
             m.checker = Some((k, size));
-        }
-    }
-
-    // Shape text snippets: source id → (text, byte map into the file or override).
-    let mut snippets: Vec<(&Located, &[usize])> = Vec::new();
-    let shape_error = |snips: &[(&Located, &[usize])], d: Diagnostic| -> SceneError {
-        let Some((loc, map)) = snips.get(d.source) else {
-            return src.error(Origin::Implicit, d.message.clone(), None, &d.notes);
-        };
-        let at = |i: usize| map.get(i).copied().unwrap_or_else(|| map.last().copied().unwrap_or(0));
-        match loc.origin {
-            Origin::File(_) => {
-                let span = Span::new(at(d.span.start), at(d.span.end.max(d.span.start)));
-                src.error_at(span, &d.message, d.label.as_deref(), &d.notes)
-            }
-            o => {
-                let mut notes = d.notes.clone();
-                notes.insert(0, format!("at byte {} of the value", d.span.start));
-                src.error(o, d.message.clone(), d.label.as_deref(), &notes)
-            }
-        }
-    };
-
-    // [params]
-    let mut lib = Library::new();
-    lib.set_time(options.time);
-    if let Some(cache) = &options.analyses {
-        lib.use_analyses(cache.clone());
-    }
-    let mut params = Vec::new();
-    let mut surface_materials: Vec<(String, usize)> = Vec::new();
-    let mut param_ranges: Vec<ParamRange> = Vec::new();
-    if let Some(v) = top.get("params") {
-        let Item::Table(entries) = &v.item else {
-            return Err(src.error(
-                v.origin,
-                "`params` must be a table of named numbers or vectors",
-                None,
-                &[],
-            ));
-        };
-        for e in entries {
-            let key = format!("params.{}", e.key);
-            let val = param_spec(src, &e.value, &key, &mut param_ranges)?;
-            check_name(src, &e.key, e.key_origin)?;
-            if e.key == "t" {
-                return Err(src.error(
-                    e.key_origin,
-                    "`params.t`: `t` is the built-in time in shape text",
-                    Some("choose another name"),
-                    &["shape text reads the time (seconds, `--time`) as `t`".into()],
-                ));
-            }
-            lib.set_param(&e.key, val);
-            params.push((e.key.clone(), val));
         }
     }
 
@@ -1069,27 +1038,27 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         }
     }
     top.finish(TOP_KEYS)?;
-    if objects.is_empty() {
-        return Err(src.error(
-            Origin::Implicit,
-            "the scene has no objects",
-            None,
-            &["add at least one [[object]] with a `shape`".into()],
-        ));
-    }
 
-    // The scene's distance: union, or smooth union with k = blend, folded in file order.
-    let mut acc = nodes[0];
-    for &n in &nodes[1..] {
-        acc = smooth_union(&mut builder, acc, n, render.blend);
-    }
+    // The scene's distance: union, or smooth union with k = blend, folded in
+    // file order (a scene without objects is empty space: every ray misses).
+    let acc = match nodes.split_first() {
+        None => builder.constant(EMPTY),
+        Some((&first, rest)) => rest
+            .iter()
+            .fold(first, |acc, &n| smooth_union(&mut builder, acc, n, render.blend)),
+    };
     let shape = Shape::from_tape(builder.tape(acc));
     // The unsigned distance to the nearest object surface, for rays inside objects.
-    let mut u = builder.abs(nodes[0]);
-    for &n in &nodes[1..] {
-        let a = builder.abs(n);
-        u = builder.min(u, a);
-    }
+    let u = match nodes.split_first() {
+        None => builder.constant(EMPTY),
+        Some((&first, rest)) => {
+            let a0 = builder.abs(first);
+            rest.iter().fold(a0, |u, &n| {
+                let a = builder.abs(n);
+                builder.min(u, a)
+            })
+        }
+    };
     let surfaces = Shape::from_tape(builder.tape(u));
     // Shadows with transparent objects: opaque objects occlude (with the
     // penumbra estimate), transparent ones transmit (traced separately).
@@ -1174,11 +1143,116 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         rest,
         input_names,
         inputs,
+        driven,
         library: lib,
         param_ranges,
         origin: std::sync::Arc::new(SceneOrigin { sources: src.clone() }),
     })
 }
+
+/// Camera keys whose numbers may be shape text of `t` and the parameters.
+const CAMERA_EXPR: &[&str] = &["position", "target", "fov"];
+/// Light keys whose numbers may be shape text.
+const LIGHT_EXPR: &[&str] = &[
+    "direction",
+    "position",
+    "color",
+    "intensity",
+    "size",
+    "radius",
+    "u",
+    "v",
+    "attenuation",
+];
+/// Material keys whose numbers may be shape text.
+const MATERIAL_EXPR: &[&str] = &[
+    "ambient",
+    "diffuse",
+    "specular",
+    "shininess",
+    "emission",
+    "reflectivity",
+    "transparency",
+    "ior",
+    "absorption",
+];
+
+/// A copy of the table `v` in which every value of `keys` written as shape
+/// text (or an array with shape text in it) is replaced by its value now,
+/// at the value's origin, so the table reads and checks like numbers; each
+/// such value is recorded in `driven` to be computed again when the time or
+/// a parameter changes.
+fn resolve_exprs<'a>(
+    src: &Sources,
+    lib: &Library,
+    v: &'a Located,
+    ctx: &str,
+    keys: &[&str],
+    snippets: &mut Vec<(&'a Located, &'a [usize])>,
+    driven: &mut Vec<Driven>,
+) -> std::result::Result<Located, ValueError> {
+    let Item::Table(entries) = &v.item else {
+        return Ok(v.clone());
+    };
+    let vars = lib.input_values();
+    let mut out = v.clone();
+    let Item::Table(out_entries) = &mut out.item else {
+        unreachable!()
+    };
+    for (e, o) in entries.iter().zip(out_entries.iter_mut()) {
+        if !keys.contains(&e.key.as_str()) {
+            continue;
+        }
+        let has_text = match &e.value.item {
+            Item::Str(..) => true,
+            Item::Array(items) => items.iter().any(|it| matches!(it.item, Item::Str(..))),
+            _ => false,
+        };
+        if !has_text {
+            continue;
+        }
+        let key = format!("{ctx}.{}", e.key);
+        let width = match &e.value.item {
+            Item::Array(items) => items.len(),
+            _ => 0,
+        };
+        let values = match width {
+            0 => {
+                // One string: a float or a vec3.
+                let Item::Str(text, map) = &e.value.item else {
+                    unreachable!()
+                };
+                let id = snippets.len();
+                snippets.push((&e.value, map));
+                let mut b = Builder::new();
+                let (_, comps) = lib.compile_uniform(&mut b, text, id).map_err(ValueError::Shape)?;
+                comps.into_iter().map(|n| Shape::from_tape(b.tape(n))).collect()
+            }
+            _ => uniform_values(src, lib, &e.value, &key, width, snippets)?,
+        };
+        let now: Vec<f64> = values.iter().map(|s| s.eval_with(&vars, [0.0; 3])).collect();
+        o.value.item = match now[..] {
+            [x] => Item::Num(x, false),
+            _ => Item::Array(
+                now.iter()
+                    .map(|&x| Located {
+                        item: Item::Num(x, false),
+                        origin: e.value.origin,
+                    })
+                    .collect(),
+            ),
+        };
+        driven.push(Driven {
+            key,
+            values,
+            origin: e.value.origin,
+        });
+    }
+    Ok(out)
+}
+
+/// The distance of empty space (no object), far beyond any ray.
+const EMPTY: f64 = 1e9;
 
 /// The keys of an `[[object]]`.
 const OBJECT_KEYS: &[&str] = &["name", "material", "shape", "position", "rotation", "scale"];
@@ -1227,11 +1301,7 @@ enum ValueError {
 }
 
 impl ValueError {
-    fn into_scene(
-        self,
-        snippets: &Snippets,
-        shape_error: &dyn Fn(&Snippets, Diagnostic) -> SceneError,
-    ) -> SceneError {
+    fn into_scene(self, snippets: &Snippets, shape_error: &dyn Fn(&Snippets, Diagnostic) -> SceneError) -> SceneError {
         match self {
             ValueError::Scene(e) => e,
             ValueError::Shape(d) => shape_error(snippets, d),
@@ -1287,7 +1357,7 @@ fn uniform_values<'a>(
     match &v.item {
         Item::Num(x, _) if width == 1 && x.is_finite() => Ok(vec![constant_shape(*x)]),
         Item::Str(..) => text_values(v, width, snippets),
-        Item::Array(items) if width == 3 && items.len() == 3 => {
+        Item::Array(items) if width > 1 && items.len() == width => {
             let mut out = Vec::new();
             for it in items {
                 match &it.item {
@@ -1547,36 +1617,6 @@ fn parametric_domain(r: &mut Reader, ctx: &str) -> Result<[[f64; 2]; 2]> {
     d.finish(&["s", "t"])?;
     Ok(domain)
 }
-
-/// All keys of `[render]`.
-pub const RENDER_KEYS: &[&str] = &[
-    "width",
-    "height",
-    "aa",
-    "max_steps",
-    "hit_epsilon",
-    "relative_epsilon",
-    "max_distance",
-    "step_scale",
-    "normals",
-    "normal_epsilon",
-    "shadows",
-    "shadow_exponent",
-    "shadow_start",
-    "shadow_max_distance",
-    "shadow_max_steps",
-    "ao",
-    "ao_samples",
-    "ao_step",
-    "ao_intensity",
-    "background",
-    "blend",
-    "material_blend",
-    "view",
-    "max_depth",
-    "min_weight",
-    "analytic",
-];
 
 /// min(a,b) − max(k−|a−b|,0)²/(4k), or min(a, b) when k = 0.
 fn smooth_union(b: &mut Builder, x: isoray_shape::Node, y: isoray_shape::Node, k: f64) -> isoray_shape::Node {

@@ -109,95 +109,96 @@ pub enum View {
     Normals,
 }
 
-/// Render settings (`[render]`).
-#[derive(Debug, Clone, PartialEq)]
-pub struct RenderSettings {
-    /// Image width in pixels (default 960).
-    pub width: u32,
-    /// Image height in pixels (default 540).
-    pub height: u32,
-    /// Supersampling factor: aa×aa samples per pixel on a uniform grid (default 1).
-    pub aa: u32,
-    /// Maximum sphere-tracing steps per ray (default 256).
-    pub max_steps: u32,
-    /// A ray hits when the distance falls below this (default 1e-4).
-    pub hit_epsilon: f64,
-    /// Hit when d < hit_epsilon·t instead (default false).
-    pub relative_epsilon: bool,
-    /// Rays stop beyond this distance (default 100).
-    pub max_distance: f64,
-    /// Step = d·step_scale; below 1 for distance bounds that overestimate (default 1).
-    pub step_scale: f64,
-    /// Normal estimation (default tetrahedron).
-    pub normals: NormalMethod,
-    /// Finite-difference step for normals (default 1e-3).
-    pub normal_epsilon: f64,
-    /// Shadow technique (default soft).
-    pub shadows: ShadowMode,
-    /// The shadow term is raised to this power (default 1).
-    pub shadow_exponent: f64,
-    /// Shadow rays start this far from the surface (default 0.01).
-    pub shadow_start: f64,
-    /// Shadow rays stop after this distance (default 20).
-    pub shadow_max_distance: f64,
-    /// Maximum steps of a shadow ray (default 128).
-    pub shadow_max_steps: u32,
-    /// Ambient occlusion on (default true).
-    pub ao: bool,
-    /// AO samples along the normal (default 5).
-    pub ao_samples: u32,
-    /// Distance between AO samples (default 0.05).
-    pub ao_step: f64,
-    /// AO strength (default 1).
-    pub ao_intensity: f64,
-    /// Colour of rays that miss (linear RGB, default 0.95 grey).
-    pub background: Vec3,
-    /// 0: objects combine by union; k > 0: smooth union with this k (default 0).
-    pub blend: f64,
-    /// Fraction of the blend width over which materials mix (default 0.3;
-    /// 1 mixes over the whole width, small values give sharp colour seams).
-    pub material_blend: f64,
-    /// What the image shows (default shaded).
-    pub view: View,
-    /// Bounces of reflected and refracted rays after the primary hit (default 5).
-    pub max_depth: u32,
-    /// Secondary rays whose weight (largest channel) falls below this stop (default 0.001).
-    pub min_weight: f64,
-    /// Intersect objects that are exactly planes or spheres in closed form
-    /// (default true; not with `blend` > 0 or the steps view).
-    pub analytic: bool,
+use crate::schema::{boolean, choice, colour, int, num, range, settings, Named, Range};
+
+impl Named for NormalMethod {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("central", NormalMethod::Central),
+        ("forward", NormalMethod::Forward),
+        ("tetrahedron", NormalMethod::Tetrahedron),
+        ("analytic", NormalMethod::Analytic),
+    ];
 }
 
-impl Default for RenderSettings {
-    fn default() -> Self {
-        RenderSettings {
-            width: 960,
-            height: 540,
-            aa: 1,
-            max_steps: 256,
-            hit_epsilon: 1e-4,
-            relative_epsilon: false,
-            max_distance: 100.0,
-            step_scale: 1.0,
-            normals: NormalMethod::Tetrahedron,
-            normal_epsilon: 1e-3,
-            shadows: ShadowMode::Soft,
-            shadow_exponent: 1.0,
-            shadow_start: 0.01,
-            shadow_max_distance: 20.0,
-            shadow_max_steps: 128,
-            ao: true,
-            ao_samples: 5,
-            ao_step: 0.05,
-            ao_intensity: 1.0,
-            background: [0.95, 0.95, 0.95],
-            blend: 0.0,
-            material_blend: 0.3,
-            max_depth: 5,
-            min_weight: 1e-3,
-            analytic: true,
-            view: View::Shaded,
-        }
+impl Named for ShadowMode {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("none", ShadowMode::None),
+        ("hard", ShadowMode::Hard),
+        ("soft", ShadowMode::Soft),
+        ("improved", ShadowMode::Improved),
+    ];
+}
+
+impl Named for View {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("shaded", View::Shaded),
+        ("steps", View::Steps),
+        ("normals", View::Normals),
+    ];
+}
+
+const STEP_SCALE: Range = range(0.0, false, 2.0, true, "0 < s ≤ 2", "a step scale in (0, 2]");
+const FRACTION: Range = range(0.0, false, 1.0, true, "0 < f ≤ 1", "a fraction in (0, 1]");
+const WEIGHT: Range = range(0.0, true, 1.0, false, "0 ≤ w < 1", "a number from 0 to below 1");
+
+settings! {
+    /// Render settings (`[render]`): each field's key, default, allowed
+    /// values and meaning are in [`render_keys`] (and `docs/SCENE.md`).
+    pub struct RenderSettings, keys render_keys {
+        /// Image width in pixels.
+        width: u32 = 960, int(1, 16384), "image width in pixels (`--width` overrides)";
+        /// Image height in pixels.
+        height: u32 = 540, int(1, 16384), "image height in pixels (`--height` overrides)";
+        /// Supersampling factor: aa×aa samples per pixel on a uniform grid.
+        aa: u32 = 1, int(1, 16), "supersampling: aa × aa samples per pixel (`--aa` overrides)";
+        /// Maximum sphere-tracing steps per ray.
+        max_steps: u32 = 256, int(1, 100_000), "sphere-tracing steps per primary ray";
+        /// A ray hits when the distance falls below this.
+        hit_epsilon: f64 = 1e-4, num(Range::POSITIVE), "a ray hits when the distance falls below this";
+        /// Hit when d < hit_epsilon·t instead.
+        relative_epsilon: bool = false, boolean(), "hit when d < `hit_epsilon`·t instead (t = distance travelled)";
+        /// Rays stop beyond this distance.
+        max_distance: f64 = 100.0, num(Range::POSITIVE), "rays that travel further miss";
+        /// Step = d·step_scale; below 1 for distance bounds that overestimate.
+        step_scale: f64 = 1.0, num(STEP_SCALE), "each step advances s·d; use s < 1 for bounds that overestimate (section 8)";
+        /// Normal estimation.
+        normals: NormalMethod = NormalMethod::Tetrahedron, choice::<NormalMethod>(), "how normals are estimated (section 9.2)";
+        /// Finite-difference step for normals.
+        normal_epsilon: f64 = 1e-3, num(Range::POSITIVE), "finite-difference step of the normal estimate (unused by `\"analytic\"`)";
+        /// Shadow technique.
+        shadows: ShadowMode = ShadowMode::Soft, choice::<ShadowMode>(), "shadow technique (section 9.4)";
+        /// The shadow term is raised to this power.
+        shadow_exponent: f64 = 1.0, num(Range::POSITIVE), "the shadow factor is raised to this power";
+        /// Shadow rays start this far from the surface.
+        shadow_start: f64 = 0.01, num(Range::NON_NEGATIVE), "shadow rays start this far along the ray";
+        /// Shadow rays stop after this distance.
+        shadow_max_distance: f64 = 20.0, num(Range::POSITIVE), "shadow rays stop after this distance";
+        /// Maximum steps of a shadow ray.
+        shadow_max_steps: u32 = 128, int(1, 100_000), "steps per shadow ray";
+        /// Ambient occlusion on.
+        ao: bool = true, boolean(), "ambient occlusion on or off";
+        /// AO samples along the normal.
+        ao_samples: u32 = 5, int(1, 64), "AO samples along the normal";
+        /// Distance between AO samples.
+        ao_step: f64 = 0.05, num(Range::POSITIVE), "distance between AO samples";
+        /// AO strength.
+        ao_intensity: f64 = 1.0, num(Range::NON_NEGATIVE), "AO strength (0 turns AO off)";
+        /// Colour of rays that miss (linear RGB).
+        background: Vec3 = [0.95, 0.95, 0.95], colour(), "colour of rays that miss (linear RGB)";
+        /// 0: objects combine by union; k > 0: smooth union with this k.
+        blend: f64 = 0.0, num(Range::NON_NEGATIVE), "0: objects combine by union; k > 0: by smooth union with this k (see `[[object]]` below)";
+        /// Fraction of the blend width over which materials mix (1 mixes
+        /// over the whole width, small values give sharp colour seams).
+        material_blend: f64 = 0.3, num(FRACTION), "with `blend` > 0: the fraction of the blend width over which materials mix; 1 mixes over the whole width, small values give sharp colour seams";
+        /// What the image shows.
+        view: View = View::Shaded, choice::<View>(), "what the image shows (section 9.7)";
+        /// Bounces of reflected and refracted rays after the primary hit.
+        max_depth: u32 = 5, int(0, 64), "bounces of reflected and refracted rays after the primary hit";
+        /// Secondary rays whose weight (largest channel) falls below this stop.
+        min_weight: f64 = 1e-3, num(WEIGHT), "a reflected or refracted ray whose weight (largest channel) is below this is not traced";
+        /// Intersect objects that are exactly planes or spheres in closed
+        /// form (not with `blend` > 0 or the steps view).
+        analytic: bool = true, boolean(), "objects whose distance is exactly a plane's or a sphere's (recognised numerically, whatever the text) are intersected in closed form and the other objects are marched up to them; not with `blend` > 0 or `view = \"steps\"`";
     }
 }
 
@@ -460,9 +461,79 @@ pub struct Scene {
     pub inputs: Vec<f64>,
     /// The names of `inputs`, in order.
     pub input_names: Vec<String>,
+    /// Camera, light and material values written as shape text of `t` and
+    /// the parameters: computed again whenever those change.
+    pub driven: Vec<Driven>,
     /// What the scene was loaded from, to compile it again when a value
     /// that exact algebra bound changes.
     pub(crate) origin: std::sync::Arc<SceneOrigin>,
+}
+
+/// A checked value for [`Scene::set_value`].
+#[derive(Debug, Clone, Copy)]
+enum SetValue {
+    CameraPosition(Vec3),
+    CameraTarget(Vec3),
+    CameraFov(f64),
+    Light(usize, LightValue),
+    Material(usize, MaterialValue),
+}
+
+#[derive(Debug, Clone, Copy)]
+enum LightValue {
+    Intensity(f64),
+    Size(f64),
+    Color(Vec3),
+    Attenuation(Vec3),
+    Direction(Vec3),
+    Position(Vec3),
+    Radius(f64),
+    U(Vec3),
+    V(Vec3),
+}
+
+#[derive(Debug, Clone, Copy)]
+enum MaterialValue {
+    /// ambient, diffuse, specular, emission, absorption, reflectivity (by index).
+    Colour(usize, Vec3),
+    Shininess(f64),
+    Transparency(f64),
+    Ior(f64),
+}
+
+fn field_index(field: &str) -> usize {
+    [
+        "ambient",
+        "diffuse",
+        "specular",
+        "emission",
+        "absorption",
+        "reflectivity",
+    ]
+    .iter()
+    .position(|f| *f == field)
+    .unwrap_or(5)
+}
+
+fn nonneg(x: f64) -> Option<f64> {
+    (x >= 0.0).then_some(x)
+}
+
+fn positive(x: f64) -> Option<f64> {
+    (x > 0.0).then_some(x)
+}
+
+/// A scene value written as shape text of the time and the parameters,
+/// such as `intensity = "1.0 + 0.5 * sin(t)"`.
+#[derive(Debug, Clone)]
+pub struct Driven {
+    /// The dotted key it sets (`light.0.intensity`, `camera.position`).
+    pub key: String,
+    /// One expression per component (1, or 3 for vectors and colours).
+    pub values: Vec<Shape>,
+    /// Where it was written.
+    #[allow(dead_code)]
+    pub(crate) origin: crate::doc::Origin,
 }
 
 /// The texts a scene was loaded from.
@@ -597,12 +668,198 @@ impl Scene {
                 }
             }
         }
+        self.driven_values(&next)?;
         Ok((next, changed))
+    }
+
+    /// Sets a camera, light or material value by its dotted key, as written
+    /// in the file: `camera.position`, `camera.fov`, `light.0.intensity`,
+    /// `light.1.color`, `material.gold.diffuse`, … `value` has 3 components
+    /// for vectors and colours (1 gives a grey colour) and 1 for numbers.
+    /// The value is checked as the loader checks it; an error changes nothing.
+    pub fn set_value(&mut self, key: &str, value: &[f64]) -> Result<(), crate::SceneError> {
+        let v = self.check_value(key, value)?;
+        self.store_value(v);
+        Ok(())
+    }
+
+    /// Checks a value for [`Scene::set_value`] without storing it.
+    fn check_value(&self, key: &str, value: &[f64]) -> Result<SetValue, crate::SceneError> {
+        let err = |what: &str| {
+            crate::SceneError::usage(format!(
+                "`{key}` = {}: expected {what}",
+                value.iter().map(|x| format!("{x}")).collect::<Vec<_>>().join(", ")
+            ))
+        };
+        let one = || match value {
+            [x] if x.is_finite() => Ok(*x),
+            _ => Err(err("one number")),
+        };
+        let three = || match value {
+            [x, y, z] if [x, y, z].iter().all(|v| v.is_finite()) => Ok([*x, *y, *z]),
+            _ => Err(err("three numbers")),
+        };
+        let colour = |lo: f64, hi: f64| {
+            let c = match value {
+                [x] => [*x; 3],
+                [x, y, z] => [*x, *y, *z],
+                _ => return Err(err("a colour: one number or three")),
+            };
+            if c.iter().all(|v| v.is_finite() && *v >= lo && *v <= hi) {
+                Ok(c)
+            } else if hi.is_infinite() {
+                Err(err("a colour with components ≥ 0"))
+            } else {
+                Err(err("a colour with components from 0 to 1"))
+            }
+        };
+        let parts: Vec<&str> = key.split('.').collect();
+        let unknown = || crate::SceneError::usage(format!("`{key}` is not a value that can be set or driven"));
+        Ok(match parts[..] {
+            ["camera", "position"] => SetValue::CameraPosition(three()?),
+            ["camera", "target"] => SetValue::CameraTarget(three()?),
+            ["camera", "fov"] => {
+                let f = one()?;
+                if !(f > 0.0 && f < 180.0) {
+                    return Err(err("a vertical field of view in degrees, between 0 and 180"));
+                }
+                SetValue::CameraFov(f)
+            }
+            ["light", i, field] => {
+                let Some(index) = i.parse::<usize>().ok().filter(|&k| k < self.lights.len()) else {
+                    return Err(crate::SceneError::usage(format!(
+                        "`{key}`: the scene has {} light(s)",
+                        self.lights.len()
+                    )));
+                };
+                let kind = self.lights[index].kind;
+                let v = match (field, kind) {
+                    ("intensity", _) => LightValue::Intensity(nonneg(one()?).ok_or_else(|| err("a number ≥ 0"))?),
+                    ("size", _) => LightValue::Size(positive(one()?).ok_or_else(|| err("a positive number"))?),
+                    ("color", _) => LightValue::Color(colour(0.0, f64::INFINITY)?),
+                    ("attenuation", _) => LightValue::Attenuation(colour(0.0, f64::INFINITY)?),
+                    ("direction", LightKind::Directional { .. }) => {
+                        let d = three()?;
+                        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                        if n < 1e-12 {
+                            return Err(err("a direction towards the light (not zero)"));
+                        }
+                        LightValue::Direction(d.map(|x| x / n))
+                    }
+                    ("position", LightKind::Point { .. } | LightKind::Sphere { .. } | LightKind::Rect { .. }) => {
+                        LightValue::Position(three()?)
+                    }
+                    ("radius", LightKind::Sphere { .. }) => {
+                        LightValue::Radius(positive(one()?).ok_or_else(|| err("a positive number"))?)
+                    }
+                    ("u", LightKind::Rect { .. }) => LightValue::U(three()?),
+                    ("v", LightKind::Rect { .. }) => LightValue::V(three()?),
+                    ("direction" | "position" | "radius" | "u" | "v", _) => {
+                        return Err(crate::SceneError::usage(format!(
+                            "`{key}` does not apply to this kind of light"
+                        )))
+                    }
+                    _ => return Err(unknown()),
+                };
+                SetValue::Light(index, v)
+            }
+            ["material", name, field] => {
+                let Some(index) = self.materials.iter().position(|m| m.name == name) else {
+                    return Err(crate::SceneError::usage(format!(
+                        "`{key}`: no material named \"{name}\""
+                    )));
+                };
+                let v = match field {
+                    "ambient" | "diffuse" | "specular" | "emission" | "absorption" => {
+                        MaterialValue::Colour(field_index(field), colour(0.0, f64::INFINITY)?)
+                    }
+                    "reflectivity" => MaterialValue::Colour(field_index(field), colour(0.0, 1.0)?),
+                    "shininess" => MaterialValue::Shininess(positive(one()?).ok_or_else(|| err("a positive number"))?),
+                    "transparency" => {
+                        let x = one()?;
+                        if !(0.0..=1.0).contains(&x) {
+                            return Err(err("a number from 0 to 1"));
+                        }
+                        MaterialValue::Transparency(x)
+                    }
+                    "ior" => {
+                        let x = one()?;
+                        if !(1.0..=10.0).contains(&x) {
+                            return Err(err("an index of refraction from 1 to 10"));
+                        }
+                        MaterialValue::Ior(x)
+                    }
+                    _ => return Err(unknown()),
+                };
+                SetValue::Material(index, v)
+            }
+            _ => return Err(unknown()),
+        })
+    }
+
+    fn store_value(&mut self, v: SetValue) {
+        match v {
+            SetValue::CameraPosition(p) => self.camera.position = p,
+            SetValue::CameraTarget(p) => self.camera.target = p,
+            SetValue::CameraFov(f) => self.camera.fov = f,
+            SetValue::Light(i, v) => {
+                let l = &mut self.lights[i];
+                match (v, &mut l.kind) {
+                    (LightValue::Intensity(x), _) => l.intensity = x,
+                    (LightValue::Size(x), _) => l.size = x,
+                    (LightValue::Color(c), _) => l.color = c,
+                    (LightValue::Attenuation(c), _) => l.attenuation = c,
+                    (LightValue::Direction(d), LightKind::Directional { direction }) => *direction = d,
+                    (
+                        LightValue::Position(p),
+                        LightKind::Point { position }
+                        | LightKind::Sphere { position, .. }
+                        | LightKind::Rect { position, .. },
+                    ) => *position = p,
+                    (LightValue::Radius(r), LightKind::Sphere { radius, .. }) => *radius = r,
+                    (LightValue::U(e), LightKind::Rect { u, .. }) => *u = e,
+                    (LightValue::V(e), LightKind::Rect { v, .. }) => *v = e,
+                    _ => {}
+                }
+            }
+            SetValue::Material(i, v) => {
+                let m = &mut self.materials[i];
+                match v {
+                    MaterialValue::Colour(k, c) => match k {
+                        0 => m.ambient = c,
+                        1 => m.diffuse = c,
+                        2 => m.specular = c,
+                        3 => m.emission = c,
+                        4 => m.absorption = c,
+                        _ => m.reflectivity = c,
+                    },
+                    MaterialValue::Shininess(x) => m.shininess = x,
+                    MaterialValue::Transparency(x) => m.transparency = x,
+                    MaterialValue::Ior(x) => m.ior = x,
+                }
+            }
+        }
+    }
+
+    /// The driven values at the inputs `vars`, checked.
+    fn driven_values(&self, vars: &[f64]) -> Result<Vec<SetValue>, crate::SceneError> {
+        let t = vars.first().copied().unwrap_or(0.0);
+        self.driven
+            .iter()
+            .map(|d| {
+                let v: Vec<f64> = d.values.iter().map(|s| s.eval_with(vars, [0.0; 3])).collect();
+                self.check_value(&d.key, &v)
+                    .map_err(|e| crate::SceneError::usage(format!("{} (at t = {t}, from its expression)", e.message)))
+            })
+            .collect()
     }
 
     /// Applies new inputs: recompiles objects that bound a changed one, and
     /// re-derives the closed forms of objects that read one.
     fn apply_inputs(&mut self, next: Vec<f64>, changed: Vec<u32>) -> Result<(), crate::SceneError> {
+        for v in self.driven_values(&next)? {
+            self.store_value(v);
+        }
         self.inputs = next;
         let vars = &changed[..];
         let bound = self
@@ -644,6 +901,7 @@ impl Scene {
         let opts = crate::LoadOptions {
             time: self.time(),
             analyses: Some(self.library.analyses().clone()),
+            cancel: self.library.cancel_token().cloned(),
         };
         let fresh = crate::load_str_with(&src.text, &src.path, &src.overrides, &opts)?;
         let origin = self.origin.clone();

@@ -127,3 +127,30 @@ fn glsl_shapes_compile() {
         );
     }
 }
+
+/// The rows of the Markdown table that follows `heading` in SCENE.md.
+fn table_after(md: &str, heading: &str) -> Vec<String> {
+    let start = md
+        .find(heading)
+        .unwrap_or_else(|| panic!("SCENE.md has no `{heading}`"));
+    md[start..]
+        .lines()
+        .skip_while(|l| !l.starts_with('|'))
+        .take_while(|l| l.starts_with('|'))
+        .skip(2) // the header and its rule
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn key_tables_are_the_schema() {
+    let md = scene_md();
+    let want: Vec<String> = isoray_scene::render_keys().iter().map(|k| k.doc_row()).collect();
+    let have = table_after(&md, "### `[render]`");
+    if have != want {
+        panic!(
+            "the [render] table of SCENE.md differs from the key schema (crates/isoray-scene/src/model.rs); it should read:\n{}",
+            want.join("\n")
+        );
+    }
+}

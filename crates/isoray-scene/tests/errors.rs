@@ -82,8 +82,18 @@ fn semantic_errors() {
     let e =
         err("[camera]\nposition = [0.0, 0.0, 0.0]\ntarget = [0.0, 0.0, 0.0]\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
     assert!(e.message.contains("no direction"), "{e}");
-    let e = err("[render]\nwidth = 10\n");
-    assert!(e.message.contains("no objects"), "{e}");
+    // A scene without objects is empty space, not an error.
+    let empty = isoray_scene::load_str("[render]\nwidth = 10\n", "empty.toml", &[]).unwrap();
+    assert!(empty.objects.is_empty() && empty.distance([0.0; 3]) >= 1e9);
+    // A period of repeat that is not positive is a load-time error at its text.
+    let e = err("[[object]]\nshape = \"sphere(repeat(p, vec3(2.0, 0.0, 2.0)), 0.5)\"\n");
+    assert!(
+        e.message.contains("the period of `repeat` must be positive, found 0"),
+        "{e}"
+    );
+    assert_eq!((e.line, e.column), (Some(2), Some(27)));
+    let e = err("[params]\nk = -1.0\n[[object]]\nshape = \"sphere(repeat_limited(p, k, vec3(2.0)), 0.5)\"\n");
+    assert!(e.message.contains("found -1 with the parameters as they are"), "{e}");
     let e = err("[[light]]\nkind = \"point\"\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
     assert!(e.message.contains("needs a `position`"), "{e}");
     let e = err("[[light]]\nkind = \"point\"\nposition = [0.0, 1.0, 0.0]\ndirection = [0.0, 1.0, 0.0]\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
@@ -153,8 +163,8 @@ fn examples_load() {
 
 #[test]
 fn garbage_never_panics() {
+    // (The empty scene is valid: empty space.)
     let samples = [
-        "",
         "[",
         "]]",
         "a = ",
@@ -267,4 +277,25 @@ fn cube_environment_maps_load_and_look_up_their_faces() {
     std::fs::write(&path, text.replace("py = \"py.png\", ", "")).unwrap();
     let e = isoray_scene::load(&path, &[]).unwrap_err();
     assert!(e.message.contains("needs `py`"), "{e}");
+}
+
+#[test]
+fn errors_are_structured_for_editors() {
+    let text = "[render]\naa = 0\n[[object]]\nshape = \"sphere(p, 1.0)\"\n";
+    let e = load_str(text, "s.toml", &[]).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("render.aa"));
+    let span = e.span.expect("a span in the file");
+    assert_eq!(&text[span.start..span.end], "0");
+    assert_eq!(e.label.as_deref(), Some("expected an integer from 1 to 16"));
+    let e = load_str("[render]\nwidht = 3\n", "s.toml", &[]).unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("render.widht"));
+    assert!(e.notes.iter().any(|n| n == "did you mean `width`?"), "{:?}", e.notes);
+    let e = load_str(
+        "[[light]]\nkind = \"sun\"\n",
+        "s.toml",
+        &["light.0.kind=\"spot\"".into()],
+    )
+    .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("light.0.kind"));
+    assert_eq!(e.file, "--set");
 }

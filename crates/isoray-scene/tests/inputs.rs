@@ -86,3 +86,97 @@ fn setting_a_parameter_checks_name_type_and_range() {
     s.set_param("c", Value::Vec3([1.0, 0.0, 0.0])).unwrap();
     assert_eq!(s.distance([1.0, 0.0, 0.0]), -1.0);
 }
+
+#[test]
+fn camera_light_and_material_values_may_be_expressions_of_time() {
+    let text = r#"
+[params]
+glow = 0.5
+[camera]
+position = ["4.0 * sin(t)", 1.0, "4.0 * cos(t)"]
+fov = "40.0 + 10.0 * t"
+[[light]]
+kind = "point"
+position = "vec3(0.0, 3.0 + t, 0.0)"
+intensity = "1.0 + 0.5 * sin(t)"
+color = [1.0, "glow", 0.25]
+[material.warm]
+diffuse = "vec3(0.8, 0.4 * glow, 0.1)"
+shininess = "16.0 * (1.0 + t)"
+[[object]]
+material = "warm"
+shape = "sphere(p, 1.0)"
+"#;
+    let mut s = scene(text);
+    let keys: Vec<&str> = s.driven.iter().map(|d| d.key.as_str()).collect();
+    assert_eq!(
+        keys,
+        [
+            "camera.position",
+            "camera.fov",
+            "light.0.position",
+            "light.0.intensity",
+            "light.0.color",
+            "material.warm.diffuse",
+            "material.warm.shininess"
+        ]
+    );
+    assert_eq!(s.camera.position, [0.0, 1.0, 4.0]);
+    assert_eq!(s.lights[0].intensity, 1.0);
+    assert_eq!(s.lights[0].color, [1.0, 0.5, 0.25]);
+    s.set_time(1.0).unwrap();
+    assert!((s.camera.position[0] - 4.0 * 1f64.sin()).abs() < 1e-12);
+    assert_eq!(s.camera.fov, 50.0);
+    assert_eq!(
+        s.lights[0].kind,
+        isoray_scene::LightKind::Point {
+            position: [0.0, 4.0, 0.0]
+        }
+    );
+    assert!((s.lights[0].intensity - (1.0 + 0.5 * 1f64.sin())).abs() < 1e-12);
+    assert_eq!(s.materials[1].shininess, 32.0);
+    s.set_param("glow", Value::Float(1.0)).unwrap();
+    assert_eq!(s.lights[0].color, [1.0, 1.0, 0.25]);
+    assert_eq!(s.materials[1].diffuse, [0.8, 0.4, 0.1]);
+    // A value that leaves its range at some time is an error there, and changes nothing.
+    let e = s.set_time(14.0).unwrap_err();
+    assert!(
+        e.message.contains("camera.fov") && e.message.contains("at t = 14"),
+        "{}",
+        e.message
+    );
+    assert_eq!(s.camera.fov, 50.0);
+    // Setting a value directly is checked the same way.
+    s.set_value("light.0.intensity", &[2.0]).unwrap();
+    assert_eq!(s.lights[0].intensity, 2.0);
+    assert!(s.set_value("light.0.intensity", &[-1.0]).is_err());
+    assert!(
+        s.set_value("light.0.direction", &[0.0, 1.0, 0.0]).is_err(),
+        "a point light has no direction"
+    );
+    assert!(s.set_value("material.warm.reflectivity", &[1.5]).is_err());
+}
+
+#[test]
+fn expression_errors_point_into_the_value() {
+    let e = load_str(
+        "[[light]]\nintensity = \"1.0 + sin(q)\"\n[[object]]\nshape = \"sphere(p, 1.0)\"\n",
+        "bad.toml",
+        &[],
+    )
+    .unwrap_err();
+    assert!(e.message.contains("unknown name `q`"), "{}", e.rendered);
+    assert_eq!((e.line, e.column), (Some(2), Some(24)));
+    let e = load_str(
+        "[[light]]\nintensity = \"-1.0 + 0.5 * t\"\n[[object]]\nshape = \"sphere(p, 1.0)\"\n",
+        "bad.toml",
+        &[],
+    )
+    .unwrap_err();
+    assert!(
+        e.message.contains("`light.0.intensity`: expected a number ≥ 0"),
+        "{}",
+        e.rendered
+    );
+    assert_eq!(e.line, Some(2));
+}

@@ -141,19 +141,22 @@ impl Num for Dual {
             BinOp::Add => lin(1.0, 1.0),
             BinOp::Sub => lin(1.0, -1.0),
             BinOp::Mul => lin(b.v, a.v),
-            BinOp::Div => lin(1.0 / b.v, -a.v / (b.v * b.v)),
+            // ∂/∂b = −(a/b)/b: no b² to underflow or overflow.
+            BinOp::Div => lin(1.0 / b.v, -v / b.v),
+            // The derivative of the operand min/max returns: `a` on ties, and
+            // the other operand where one is NaN (which the value ignores).
             BinOp::Min => {
-                if a.v <= b.v {
-                    a.d
-                } else {
+                if b.v < a.v || a.v.is_nan() {
                     b.d
+                } else {
+                    a.d
                 }
             }
             BinOp::Max => {
-                if a.v >= b.v {
-                    a.d
-                } else {
+                if b.v > a.v || a.v.is_nan() {
                     b.d
+                } else {
+                    a.d
                 }
             }
             BinOp::Pow => {

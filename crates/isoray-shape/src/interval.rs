@@ -93,16 +93,21 @@ impl Interval {
                 let m = Interval::unary(UnOp::Abs, a);
                 Interval::widen(m.lo * m.lo, m.hi * m.hi).clamp_lo(0.0)
             }
-            UnOp::Sin => trig(a, 0.0),
-            UnOp::Cos => trig(a, std::f64::consts::FRAC_PI_2),
+            UnOp::Sin => trig(a, f64::sin, std::f64::consts::FRAC_PI_2),
+            UnOp::Cos => trig(a, f64::cos, 0.0),
             UnOp::Tan => {
-                // Monotone between asymptotes at π/2 + kπ.
-                let k = ((a.lo - std::f64::consts::FRAC_PI_2) / std::f64::consts::PI).floor();
-                let next = std::f64::consts::FRAC_PI_2 + (k + 1.0) * std::f64::consts::PI;
-                if a.width() >= std::f64::consts::PI || a.hi >= next || !a.lo.is_finite() {
+                // Monotone between the asymptotes at π/2 + kπ; the whole line
+                // when one lies in the interval or within rounding of it.
+                if !a.lo.is_finite() || !a.hi.is_finite() || a.width() >= std::f64::consts::PI {
                     WHOLE
+                } else if let Some((k0, k1)) = extrema(a, std::f64::consts::FRAC_PI_2) {
+                    if k0 <= k1 {
+                        WHOLE
+                    } else {
+                        a.monotone(f64::tan)
+                    }
                 } else {
-                    a.monotone(f64::tan)
+                    WHOLE
                 }
             }
             UnOp::Asin => Interval::new(a.lo.max(-1.0), a.hi.min(1.0)).monotone(f64::asin),
@@ -143,7 +148,17 @@ impl Interval {
                 if b.lo <= 0.0 && b.hi >= 0.0 {
                     return WHOLE;
                 }
-                Interval::binary(BinOp::Mul, a, Interval::widen(1.0 / b.hi, 1.0 / b.lo))
+                // Monotone in each argument where b keeps its sign: the
+                // extremes are quotients of ends (not a × 1/b, whose 1/b
+                // overflows for a subnormal b even where a/b is moderate).
+                let qs = [a.lo / b.lo, a.lo / b.hi, a.hi / b.lo, a.hi / b.hi];
+                if qs.iter().any(|q| q.is_nan()) {
+                    return WHOLE; // ∞ / ∞
+                }
+                Interval::widen(
+                    qs.iter().copied().fold(f64::INFINITY, f64::min),
+                    qs.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                )
             }
             BinOp::Min => Interval::new(a.lo.min(b.lo), a.hi.min(b.hi)),
             BinOp::Max => Interval::new(a.lo.max(b.lo), a.hi.max(b.hi)),
@@ -154,7 +169,11 @@ impl Interval {
                         return Interval::point(1.0);
                     }
                     let base = if n % 2 == 0 { Interval::unary(UnOp::Abs, a) } else { a };
-                    let r = Interval::widen(base.lo.powi(n), base.hi.powi(n));
+                    // Decreasing for n < 0: order the ends before widening
+                    // them. powf, as the reference: powi's repeated squaring
+                    // is off by up to |n| ulps.
+                    let (p, q) = (base.lo.powf(b.lo), base.hi.powf(b.lo));
+                    let r = Interval::widen(p.min(q), p.max(q));
                     if n < 0 && a.contains(0.0) {
                         return WHOLE;
                     }
@@ -184,21 +203,40 @@ impl Interval {
     }
 }
 
-/// sin(a + shift) over an interval: extrema at π/2 + kπ.
-fn trig(a: Interval, shift: f64) -> Interval {
-    use std::f64::consts::{FRAC_PI_2, PI, TAU};
+/// The range k0..=k1 of the k for which `first + kπ` lies in the interval
+/// or within rounding of it (the points are computed in f64, a few ulps of
+/// the interval's magnitude off); `None` when k is too large for its parity
+/// to be known.
+fn extrema(a: Interval, first: f64) -> Option<(f64, f64)> {
+    use std::f64::consts::PI;
+    let margin = 8.0 * f64::EPSILON * a.lo.abs().max(a.hi.abs()) + 4.0 * f64::EPSILON;
+    let k0 = ((a.lo - margin - first) / PI).ceil();
+    let k1 = ((a.hi + margin - first) / PI).floor();
+    (k0.abs().max(k1.abs()) < 2f64.powi(52)).then_some((k0, k1))
+}
+
+/// sin or cos (`f`) over an interval: the values at the ends, and ±1 where a
+/// crest or trough `first + kπ` (a crest for even k) may lie inside.
+fn trig(a: Interval, f: fn(f64) -> f64, first: f64) -> Interval {
+    use std::f64::consts::TAU;
+    const UNIT: Interval = Interval { lo: -1.0, hi: 1.0 };
     if !a.lo.is_finite() || !a.hi.is_finite() || a.width() >= TAU {
-        return Interval::new(-1.0, 1.0);
+        return UNIT;
     }
-    let (lo, hi) = (a.lo + shift, a.hi + shift);
-    let (mut mn, mut mx) = (lo.sin().min(hi.sin()), lo.sin().max(hi.sin()));
-    // Critical points π/2 + kπ inside [lo, hi].
-    let mut k = ((lo - FRAC_PI_2) / PI).ceil();
-    while FRAC_PI_2 + k * PI <= hi {
-        let v = (FRAC_PI_2 + k * PI).sin();
-        mn = mn.min(v);
-        mx = mx.max(v);
-        k += 1.0;
+    let Some((k0, k1)) = extrema(a, first) else {
+        return UNIT;
+    };
+    if k1 - k0 >= 1.0 {
+        return UNIT; // a crest and a trough
+    }
+    let (fl, fh) = (f(a.lo), f(a.hi));
+    let (mut mn, mut mx) = (fl.min(fh), fl.max(fh));
+    if k0 == k1 {
+        if k0.rem_euclid(2.0) == 0.0 {
+            mx = 1.0;
+        } else {
+            mn = -1.0;
+        }
     }
     Interval::new(down(mn).max(-1.0), up(mx).min(1.0))
 }

@@ -507,7 +507,10 @@ impl Builder {
     /// new DAG nodes (symbolic forward differentiation, shared subexpressions
     /// differentiated once). Non-differentiable points follow the same
     /// conventions as the dual-number evaluator: |x|' = sign(x) (1 at 0),
-    /// min/max take the derivative of the selected side, floor/round/sign have 0.
+    /// min/max take the derivative of the selected side (`a` on ties),
+    /// floor/round/sign have 0, √x has 0 at 0 and atan2 at the origin. (At a
+    /// NaN operand of min/max, which a select cannot detect, this takes `a`'s
+    /// derivative and the dual numbers that of the operand min/max returns.)
     pub fn derivative(&mut self, node: Node, var: usize) -> Node {
         let mut memo: HashMap<Node, Node> = HashMap::new();
         self.diff(node, var, &mut memo)
@@ -606,12 +609,14 @@ impl Builder {
                         self.add(t1, t2)
                     }
                     BinOp::Div => {
-                        // (da·b − a·db) / b²
-                        let t1 = self.mul(da, b);
-                        let t2 = self.mul(a, db);
-                        let num = self.sub(t1, t2);
-                        let b2 = self.square(b);
-                        self.div(num, b2)
+                        // (da − (a/b)·db) / b: no b² to underflow or overflow.
+                        let num = if self.const_value(db) == Some(0.0) {
+                            da
+                        } else {
+                            let t = self.mul(n, db);
+                            self.sub(da, t)
+                        };
+                        self.div(num, b)
                     }
                     BinOp::Min | BinOp::Max => {
                         // The derivative of the chosen side (a on ties, as the dual evaluator).
@@ -647,7 +652,9 @@ impl Builder {
                         let a2 = self.square(a);
                         let b2 = self.square(b);
                         let den = self.add(a2, b2);
-                        self.div(num, den)
+                        let q = self.div(num, den);
+                        // 0 where a² + b² = 0, as the dual evaluator does.
+                        self.select(den, q, zero)
                     }
                 }
             }

@@ -246,7 +246,40 @@ pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Opt
             .with_label("wrong number of arguments")
             .with_note(format!("signature: {}", all.join("  or  ")))));
     };
+    if let Some(e) = check_period(l, name, args) {
+        return Some(Err(e));
+    }
     Some(check(l, sig, args).map(|vals| lower(l, sig, &vals)))
+}
+
+/// The period of `repeat` and `repeat_limited` must be positive: a zero
+/// period would give NaN everywhere. Checked where the period is known at
+/// load time: constants, and values of the parameters and time as they are.
+fn check_period(l: &mut Lowerer, name: &str, args: &[Arg]) -> Option<Diagnostic> {
+    if !matches!(name, "repeat" | "repeat_limited") {
+        return None;
+    }
+    let period = args.get(1)?;
+    let vars = l.lib_input_values();
+    for &n in period.v.comps() {
+        let Some(v) = l.b.uniform_value(n, &vars) else { continue };
+        if !(v > 0.0 && v.is_finite()) {
+            let what = if l.b.const_value(n).is_some() {
+                String::new()
+            } else {
+                " with the parameters as they are".to_string()
+            };
+            return Some(
+                l.err(
+                    period.span,
+                    format!("the period of `{name}` must be positive, found {v}{what}"),
+                )
+                .with_label("expected a period > 0 (for each axis)")
+                .with_note("a very large period (such as 1e9) leaves an axis unrepeated"),
+            );
+        }
+    }
+    None
 }
 
 fn check(l: &mut Lowerer, sig: &Signature, args: &[Arg]) -> Result<Vec<Val>, Diagnostic> {

@@ -94,6 +94,8 @@ pub struct Library {
     /// Analyses of implicit and parametric surfaces, per surface and
     /// parameter values: each equation is derived (and implicitized) once.
     analyses: Analyses,
+    /// Stops long analyses (implicitization) when cancelled.
+    cancel: Option<isoray_job::CancelToken>,
 }
 
 impl Library {
@@ -114,6 +116,17 @@ impl Library {
     /// The named parameters.
     pub fn params(&self) -> &[(String, Value)] {
         &self.params
+    }
+
+    /// Lets `token` stop long analyses: an implicitization in progress ends
+    /// with an error that says it was cancelled, and nothing is cached.
+    pub fn set_cancel(&mut self, token: isoray_job::CancelToken) {
+        self.cancel = Some(token);
+    }
+
+    /// The token that stops long analyses, if any.
+    pub fn cancel_token(&self) -> Option<&isoray_job::CancelToken> {
+        self.cancel.as_ref()
     }
 
     /// Uses `cache` for the analyses of surfaces (shared with other libraries).
@@ -278,7 +291,15 @@ impl Library {
         if let Some(a) = self.analyses.0.lock().ok().and_then(|m| m.get(&key).cloned()) {
             return Ok(a);
         }
-        let a = Arc::new(analyze(self, s, params)?);
+        let a = analyze(self, s, params);
+        if let Some(c) = &self.cancel {
+            if c.is_cancelled() {
+                return Err(
+                    Diagnostic::new(s.source, Span::default(), "cancelled").with_label("the analysis was cancelled")
+                );
+            }
+        }
+        let a = Arc::new(a?);
         if let Ok(mut m) = self.analyses.0.lock() {
             m.insert(key, a.clone());
         }
@@ -617,6 +638,11 @@ impl<'a> Lowerer<'a> {
         let mut l = Lowerer::new(b, lib, source);
         l.bind = Some(lib.input_values());
         l
+    }
+
+    /// The library's current inputs (the time, then the parameters).
+    pub(crate) fn lib_input_values(&self) -> Vec<f64> {
+        self.lib.input_values()
     }
 
     /// Input `var`, or its bound value.

@@ -296,17 +296,22 @@ fn analyze_parametric(lib: &Library, s: &Surface, params: &[Value]) -> Result<An
     let quick = GroebnerOptions {
         budget: Budget {
             time: Some(GROEBNER_TIME),
+            interrupt: lib.cancel_token().cloned(),
             ..Default::default()
         },
         ..Default::default()
     };
     let (result, method) = match implicitize_groebner(&texts, &["s", "t"], &quick) {
+        Err(ImplicitError::Groebner(isoray_algebra::GroebnerError::Interrupted { .. })) => {
+            (Err(ImplicitError::Cancelled), "groebner")
+        }
         Err(ImplicitError::Groebner(_)) => (
             implicitize_interpolation(
                 &texts,
                 &["s", "t"],
                 &InterpolationOptions {
                     time: Some(INTERPOLATION_TIME),
+                    interrupt: lib.cancel_token().cloned(),
                     ..Default::default()
                 },
             ),

@@ -7,7 +7,8 @@ use isoray_algebra::coeff::is_prime;
 use isoray_algebra::groebner::groebner_in;
 use isoray_algebra::implicit::implicitize_groebner;
 use isoray_algebra::{
-    groebner, parse_poly, Budget, Fp, GroebnerOptions, ImplicitError, MonomialOrder, ParseError, Poly, Rat, Ring,
+    groebner, parse_poly, Budget, Fp, GroebnerError, GroebnerOptions, ImplicitError, MonomialOrder, ParseError, Poly,
+    Rat, Ring,
 };
 
 use crate::Failure;
@@ -29,6 +30,7 @@ fn options(timeout: Option<f64>) -> Result<GroebnerOptions, Failure> {
     Ok(GroebnerOptions {
         budget: Budget {
             time,
+            interrupt: Some(crate::jobs::cancel_token()),
             ..Default::default()
         },
         ..Default::default()
@@ -136,9 +138,12 @@ pub fn cmd_groebner(
         parsed.push(parse_poly(&ring, t).map_err(|e| bad(located(origin, t, &e)))?);
     }
     let opts = options(timeout)?;
-    let fail = |e: isoray_algebra::GroebnerError| Failure {
-        code: 1,
-        message: e.to_string(),
+    let fail = |e: GroebnerError| match e {
+        GroebnerError::Interrupted { .. } => crate::jobs::cancelled(),
+        e => Failure {
+            code: 1,
+            message: e.to_string(),
+        },
     };
     let (lines, st) = if field == 0 {
         let r = groebner(&ring, &parsed, &opts).map_err(fail)?;
@@ -201,6 +206,7 @@ pub fn cmd_implicitize(
             &params,
             &isoray_algebra::interp::InterpolationOptions {
                 time,
+                interrupt: Some(crate::jobs::cancel_token()),
                 ..Default::default()
             },
         )
@@ -214,11 +220,13 @@ pub fn cmd_implicitize(
             let first = GroebnerOptions {
                 budget: Budget {
                     time: Some(quick),
+                    interrupt: Some(crate::jobs::cancel_token()),
                     ..Default::default()
                 },
                 ..Default::default()
             };
             match implicitize_groebner(&coords, &params, &first) {
+                Err(ImplicitError::Groebner(GroebnerError::Interrupted { .. })) => Err(ImplicitError::Cancelled),
                 Err(ImplicitError::Groebner(_)) => interp(opts.budget.time.map(|t| t.saturating_sub(quick))),
                 other => other,
             }
@@ -233,6 +241,9 @@ pub fn cmd_implicitize(
             Ok(())
         }
         Err(ImplicitError::Parse { coord, text, error }) => Err(bad(located(&format!("--{coord}"), &text, &error))),
+        Err(ImplicitError::Cancelled | ImplicitError::Groebner(GroebnerError::Interrupted { .. })) => {
+            Err(crate::jobs::cancelled())
+        }
         Err(ImplicitError::Groebner(e)) => Err(Failure {
             code: 1,
             message: e.to_string(),

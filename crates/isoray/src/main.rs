@@ -1,6 +1,8 @@
 //! The `isoray` command line.
 
 mod algebra_cmd;
+mod compare;
+mod jobs;
 mod mesh_cmd;
 mod raster_cmd;
 
@@ -230,6 +232,19 @@ enum Command {
         #[command(flatten)]
         input: SceneArgs,
     },
+    /// Set scene keys and write the scene back with its comments, key order
+    /// and formatting kept: the same KEY=VALUE syntax as --set, checked like
+    /// a load, written atomically (in place unless -o is given).
+    Set {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// KEY=VALUE edits, e.g. render.width=1280 'object.0.shape=sphere(p, 2.0)' params.k=0.5.
+        #[arg(required = true, value_name = "KEY=VALUE")]
+        edits: Vec<String>,
+        /// Write the edited scene here instead of over SCENE.
+        #[arg(short, long, value_name = "OUT.toml")]
+        output: Option<PathBuf>,
+    },
 }
 
 /// The scene a command reads, its overrides and the time.
@@ -253,6 +268,7 @@ impl SceneArgs {
         overrides.extend_from_slice(extra);
         let opts = LoadOptions {
             time: self.time,
+            cancel: Some(jobs::cancel_token()),
             ..LoadOptions::default()
         };
         Ok(load_with(&self.scene, &overrides, &opts)?)
@@ -272,6 +288,9 @@ pub(crate) struct Failure {
 
 impl From<SceneError> for Failure {
     fn from(e: SceneError) -> Self {
+        if e.cancelled {
+            return jobs::cancelled();
+        }
         Failure {
             code: if e.io { 1 } else { 2 },
             message: e.rendered,
@@ -281,6 +300,9 @@ impl From<SceneError> for Failure {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if !matches!(cli.command, Command::Eval { .. }) {
+        jobs::watch_ctrl_c();
+    }
     let result = match cli.command {
         Command::Render {
             input,
@@ -391,6 +413,7 @@ fn main() -> ExitCode {
             quiet,
         }),
         Command::Surface { input, name } => cmd_surface(&input, &name),
+        Command::Set { scene, edits, output } => cmd_set(&scene, &edits, output.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -404,6 +427,17 @@ fn main() -> ExitCode {
             ExitCode::from(f.code)
         }
     }
+}
+
+fn cmd_set(scene: &Path, edits: &[String], output: Option<&Path>) -> Result<(), Failure> {
+    let report = isoray_scene::set_file(scene, edits, output)?;
+    println!(
+        "wrote {} ({} edit{})",
+        report.written.display(),
+        report.edits,
+        if report.edits == 1 { "" } else { "s" }
+    );
+    Ok(())
 }
 
 fn cmd_check(input: &SceneArgs) -> Result<(), Failure> {

@@ -3,7 +3,6 @@
 
 use std::io::IsTerminal;
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -33,9 +32,6 @@ pub(crate) struct MeshArgs<'a> {
 
 /// The finest base grid of a parametric tessellation (cells per side).
 const MAX_PARAMETRIC_GRID: u32 = 2048;
-
-/// Set by Ctrl-C: the mesher stops at its next check.
-static CANCEL: AtomicBool = AtomicBool::new(false);
 
 /// One thing to mesh: a shape with a label and a material.
 struct Target<'s> {
@@ -82,7 +78,7 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
         .num_threads(a.threads.unwrap_or(0))
         .build()
         .map_err(|e| io_failure(format!("cannot start worker threads: {e}")))?;
-    let _ = ctrlc::set_handler(|| CANCEL.store(true, Ordering::Relaxed));
+    let cancel = crate::jobs::cancel_token();
     let start = Instant::now();
 
     // A parametric surface is tessellated over its domain.
@@ -164,17 +160,12 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
     for t in &targets {
         progress.begin(&t.label);
         let report = |stage: Stage, f: f64| progress.update(stage, f);
-        let ctl = Control::new(Some(&report), Some(&CANCEL));
+        let ctl = Control::new(Some(&report), Some(cancel.flag()));
         let result = pool.install(|| mesh_shape_with(t.shape.tape(), &settings, &ctl));
         progress.end();
         let (part, stats) = match result {
             Ok(r) => r,
-            Err(MeshError::Cancelled) => {
-                return Err(Failure {
-                    code: 130,
-                    message: "cancelled; nothing was written".into(),
-                })
-            }
+            Err(MeshError::Cancelled) => return Err(crate::jobs::cancelled()),
             Err(e @ MeshError::Unbounded) if !single => {
                 eprintln!(
                     "warning: skipping {}: {e}\n  = help: give --bounds, or name the objects to mesh",

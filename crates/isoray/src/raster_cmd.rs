@@ -8,13 +8,13 @@ use std::time::Instant;
 
 use clap::ValueEnum;
 use isoray_mesh::parametric::{tessellate, TessellationSettings};
-use isoray_raster::compare::{error_vs_raytrace, ErrorReport};
 use isoray_raster::render::{raster_meshes, HiddenSurface, RasterOptions, ReflectionMethod, ShadowMethod};
 use isoray_raster::scene::{mesh_scene, MeshedScene};
 use isoray_raster::shading::Shading;
 use isoray_render::output;
 use isoray_scene::Scene;
 
+use crate::compare::{error_vs_raytrace, ErrorReport};
 use crate::{io_failure, usage, Failure};
 
 /// `--hidden`.

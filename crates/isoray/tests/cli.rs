@@ -511,3 +511,38 @@ fn every_scene_command_takes_a_time() {
     let mean = xs.iter().sum::<f64>() / xs.len() as f64;
     assert!((mean - 3.0).abs() < 0.05, "mean x {mean}");
 }
+
+#[test]
+fn set_writes_a_scene_that_renders_like_the_overrides() {
+    let src = examples().join("csg.toml");
+    let saved = tmp("csg-set.toml");
+    let edits = [
+        "params.radius=1.2",
+        "render.width=48",
+        "render.height=32",
+        "light.0.intensity=0.7",
+    ];
+    let o = run(isoray().arg("set").arg(&src).args(edits).arg("-o").arg(&saved));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("(4 edits)"));
+    let (a, b) = (tmp("csg-overrides.png"), tmp("csg-saved.png"));
+    let mut with_sets = isoray();
+    with_sets.arg("render").arg(&src).arg("-q").arg("-o").arg(&a);
+    for e in edits {
+        with_sets.args(["--set", e]);
+    }
+    assert!(run(&mut with_sets).status.success());
+    let o = run(isoray().arg("render").arg(&saved).arg("-q").arg("-o").arg(&b));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(&a).unwrap(),
+        std::fs::read(&b).unwrap(),
+        "the same image bytes"
+    );
+    // A bad edit exits 2 and leaves the file as it was.
+    let before = std::fs::read(&saved).unwrap();
+    let o = run(isoray().arg("set").arg(&saved).arg("render.aa=0"));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("render.aa"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&saved).unwrap(), before);
+}

@@ -20,7 +20,7 @@
 //!    culling, one without culling for transparent materials, as isoray does),
 //!    copy of the colour target to a buffer, map, copy of the pixels into CPU
 //!    memory: a frame is done when its pixels are in CPU memory, as isoray's.
-//! 4. Writes both images as sRGB PNGs (isoray_render::output::to_srgb8 for
+//! 4. Writes both images as sRGB PNGs (isoray_shade::srgb::to_srgb8 for
 //!    both) plus a difference image, and a report (stdout and JSON).
 //!
 //! Culling: isoray culls a triangle when its face normal, oriented by the
@@ -42,8 +42,8 @@ use bytemuck::{Pod, Zeroable};
 use isoray_raster::render::{raster_meshes, HiddenSurface, RasterOptions};
 use isoray_raster::scene::{mesh_scene, MeshedScene};
 use isoray_raster::shading::Shading;
-use isoray_render::output::to_srgb8;
 use isoray_scene::{LightKind, Scene, ShadingModel, SpecularFunction};
+use isoray_shade::srgb::to_srgb8;
 use wgpu::util::DeviceExt;
 
 const USAGE: &str = "usage: raster-bench SCENE [--resolution N] [--width W] [--height H] [--reps R] [--warmup K] \

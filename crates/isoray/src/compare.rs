@@ -1,5 +1,7 @@
-//! Measuring the polygon pipeline against the ray tracer on the same scene
-//! (`isoray raster --error-vs-raytrace`).
+//! Measuring the polygon pipeline (`isoray-raster`) against the ray tracer
+//! (`isoray-render`) on the same scene (`isoray raster --error-vs-raytrace`).
+//! It needs both renderers, so it lives in the command line and neither
+//! renderer depends on the other.
 //!
 //! * **Angular error** of the reflected direction, per reflective pixel
 //!   centre: the angle between the exact mirror direction and the direction
@@ -20,11 +22,10 @@
 //! draws shadows and none otherwise, one sample per pixel for the Z-buffer
 //! and the scene's `render.aa` for the A-buffer.
 
-use isoray_render::output::to_srgb8;
+use isoray_raster::render::{HiddenSurface, RasterImage, RasterOptions, ReflectionProbe, ShadowMethod};
 use isoray_render::{render, RenderOptions};
 use isoray_scene::{Scene, ShadowMode};
-
-use crate::render::{HiddenSurface, RasterImage, RasterOptions, ReflectionProbe, ShadowMethod};
+use isoray_shade::srgb::to_srgb8;
 
 /// Summary statistics of a set of angles, in degrees.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -177,4 +178,128 @@ pub fn error_vs_raytrace(scene: &Scene, image: &RasterImage, opts: &RasterOption
         raytrace_seconds,
     };
     (report, traced.color)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+    use isoray_raster::render::{raster, ReflectionMethod};
+
+    use super::*;
+
+    const MIRROR: &str = r#"
+[camera]
+position = [0.0, 1.5, 4.0]
+target = [0.0, 0.3, 0.0]
+
+[render]
+width = 48
+height = 32
+aa = 2
+
+[[light]]
+kind = "point"
+position = [2.0, 4.0, 3.0]
+
+[material.mirror]
+reflectivity = 0.8
+
+[[object]]
+shape = "sphere(p - vec3(0.0, 0.5, 0.0), 0.5)"
+
+[[object]]
+material = "mirror"
+shape = "plane(p, vec3(0.0, 1.0, 0.0), 0.0)"
+"#;
+
+    fn scene() -> Scene {
+        isoray_scene::load_str(MIRROR, "mirror.toml", &[]).expect("scene loads")
+    }
+
+    #[test]
+    fn angle_statistics() {
+        assert_eq!(AngleStats::of(&[]), AngleStats::default());
+        let s = AngleStats::of(&[3.0, 1.0, 2.0, 4.0]);
+        assert_eq!(s.mean, 2.5);
+        assert_eq!(s.rms, (30.0f64 / 4.0).sqrt());
+        assert_eq!((s.p95, s.max), (4.0, 4.0));
+        // The 95th percentile of 1..=100 is 95.
+        let v: Vec<f64> = (1..=100).map(f64::from).collect();
+        assert_eq!(AngleStats::of(&v).p95, 95.0);
+    }
+
+    #[test]
+    fn psnr_on_srgb_bytes() {
+        let a = [[0.5f32, 0.5, 0.5]; 4];
+        assert_eq!(psnr(&a, &a), f64::INFINITY);
+        // Black against white: every byte differs by 255, MSE = 255², 0 dB.
+        assert_eq!(psnr(&[[0.0; 3]], &[[1.0; 3]]), 0.0);
+        // One byte in three off by one: MSE = 1/3, 10 log10(3 · 255²).
+        let b = [[0.0f32, 0.0, 0.0]];
+        let c = [[0.000_304f32, 0.0, 0.0]]; // sRGB code 1
+        let expected = 10.0 * (3.0 * 255.0f64 * 255.0).log10();
+        assert!((psnr(&b, &c) - expected).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_reference_matches_what_the_pipeline_draws() {
+        let s = scene();
+        let z = reference_scene(&s, &RasterOptions::default());
+        assert!(!z.render.ao);
+        assert_eq!(z.render.shadows, ShadowMode::None);
+        assert_eq!(z.render.aa, 1);
+        let a = reference_scene(
+            &s,
+            &RasterOptions {
+                hidden: HiddenSurface::ABuffer,
+                shadows: ShadowMethod::Buffer,
+                ..RasterOptions::default()
+            },
+        );
+        assert_eq!(a.render.shadows, ShadowMode::Hard);
+        assert_eq!(a.render.aa, 2);
+    }
+
+    #[test]
+    fn exact_reflections_find_the_sphere_or_escape() {
+        let s = scene();
+        // From the floor below the sphere, straight up: the sphere (object 0).
+        let up = ReflectionProbe {
+            pixel: 0,
+            origin: DVec3::new(0.0, 0.0, 0.0),
+            normal: DVec3::Y,
+            direction: DVec3::Y,
+            footprint: 0.01,
+            found: None,
+        };
+        assert_eq!(true_reflection(&s, &up), Some(0));
+        // Far from it, towards the sky: nothing.
+        let away = ReflectionProbe {
+            origin: DVec3::new(3.0, 0.0, 0.0),
+            direction: DVec3::new(1.0, 1.0, 0.0).normalize(),
+            ..up
+        };
+        assert_eq!(true_reflection(&s, &away), None);
+        assert_eq!(away.angular_error(), 0.0);
+    }
+
+    #[test]
+    fn the_report_measures_a_mirrored_sphere() {
+        let s = scene();
+        let opts = RasterOptions {
+            resolution: 24,
+            map_size: 64,
+            reflections: ReflectionMethod::ABufferMap,
+            probes: true,
+            ..RasterOptions::default()
+        };
+        let image = raster(&s, &opts).unwrap();
+        let (report, traced) = error_vs_raytrace(&s, &image, &opts);
+        assert_eq!((report.width, report.height), (48, 32));
+        assert_eq!(traced.len(), 48 * 32);
+        assert!(report.reflective_pixels > 100, "{report:?}");
+        assert!(report.wrong_fraction < 0.5, "{report:?}");
+        assert!(report.angular_error_deg.mean < 10.0, "{report:?}");
+        assert!(report.psnr_db.is_finite() && report.psnr_db > 15.0, "{report:?}");
+    }
 }
