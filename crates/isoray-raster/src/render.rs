@@ -43,7 +43,7 @@ use crate::abuffer::{ABuffer, Fragment as AFragment, FragmentList};
 use crate::draw::{coverage_fragments, for_each_band, gbuffer, project, Cull, GPixel};
 use crate::envmap::{CubeMap, MapKind, SearchTolerance};
 use crate::pipeline::ViewTransform;
-use crate::scene::{mesh_scene, MeshedScene, SceneMeshError};
+use crate::scene::{mesh_scene_with, MeshedScene, SceneMeshError};
 use crate::shading::{Lighting, Shading};
 use crate::shadow::ShadowBuffers;
 use crate::triangles::SceneTriangles;
@@ -106,6 +106,8 @@ pub struct RasterOptions {
     pub tolerance: SearchTolerance,
     /// Record, per reflective pixel centre, what the reflection lookup found ([`RasterImage::probes`]).
     pub probes: bool,
+    /// Stops the render between its stages (meshing each object, maps, drawing, shading).
+    pub cancel: Option<isoray_job::CancelToken>,
 }
 
 impl Default for RasterOptions {
@@ -118,6 +120,7 @@ impl Default for RasterOptions {
             shadows: ShadowMethod::None,
             reflections: ReflectionMethod::None,
             map_size: 512,
+            cancel: None,
             tolerance: SearchTolerance::default(),
             probes: false,
         }
@@ -200,13 +203,27 @@ pub enum RasterError {
     /// The options are out of range.
     #[error("{0}")]
     Options(String),
+    /// [`RasterOptions::cancel`] was cancelled.
+    #[error("cancelled")]
+    Cancelled,
+}
+
+/// `Err(Cancelled)` once the options' token is cancelled.
+fn stop(opts: &RasterOptions) -> Result<(), RasterError> {
+    match &opts.cancel {
+        Some(c) if c.is_cancelled() => Err(RasterError::Cancelled),
+        _ => Ok(()),
+    }
 }
 
 /// Meshes and renders `scene`.
 pub fn raster(scene: &Scene, opts: &RasterOptions) -> Result<RasterImage, RasterError> {
     check(scene, opts)?;
     let start = Instant::now();
-    let meshed = mesh_scene(scene, opts.resolution)?;
+    let meshed = match mesh_scene_with(scene, opts.resolution, opts.cancel.as_ref()) {
+        Err(e) if e.source == isoray_mesh::MeshError::Cancelled => return Err(RasterError::Cancelled),
+        r => r?,
+    };
     let mesh = start.elapsed().as_secs_f64();
     let mut image = raster_meshes(scene, &meshed, opts)?;
     image.timings.mesh = mesh;
@@ -531,6 +548,7 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
         + zmap.as_ref().map_or(0, CubeMap::sample_count)
         + object_maps.values().map(CubeMap::sample_count).sum::<usize>();
     let maps = t0.elapsed().as_secs_f64();
+    stop(opts)?;
 
     let ctx = Ctx {
         scene,
@@ -562,6 +580,7 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
         }
     });
     let triangles = projected.len();
+    stop(opts)?;
 
     // Per-vertex (Gouraud) or per-face (flat) colours of the triangles drawn.
     let vertex_colors: HashMap<u32, [Vec3; 3]> = match opts.shading {

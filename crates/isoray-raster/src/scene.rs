@@ -8,7 +8,7 @@
 //! horizon in ordinary framings. Sheets (unsigned fields with no sign
 //! change) and empty shapes are skipped with a warning.
 
-use isoray_mesh::{mesh_shape, Mesh, MeshError, MeshSettings};
+use isoray_mesh::{mesh_shape_with, Control, Mesh, MeshError, MeshSettings};
 use isoray_scene::Scene;
 
 /// One object's mesh, with unit vertex normals (always filled).
@@ -77,6 +77,16 @@ pub fn unbounded_box(scene: &Scene) -> [[f64; 3]; 2] {
 
 /// Meshes every object of `scene` at `resolution` cells along the longest side.
 pub fn mesh_scene(scene: &Scene, resolution: u32) -> Result<MeshedScene, SceneMeshError> {
+    mesh_scene_with(scene, resolution, None)
+}
+
+/// [`mesh_scene`] that stops (with [`MeshError::Cancelled`]) when `cancel` is cancelled.
+pub fn mesh_scene_with(
+    scene: &Scene,
+    resolution: u32,
+    cancel: Option<&isoray_job::CancelToken>,
+) -> Result<MeshedScene, SceneMeshError> {
+    let ctl = Control::new(None, cancel.map(|c| c.flag()));
     let lipschitz = (1.0 / scene.render.step_scale.clamp(1e-6, 1.0)).max(1.0);
     let mut out = MeshedScene::default();
     for (i, obj) in scene.objects.iter().enumerate() {
@@ -87,11 +97,11 @@ pub fn mesh_scene(scene: &Scene, resolution: u32) -> Result<MeshedScene, SceneMe
             ..MeshSettings::default()
         };
         let shape = scene.frozen(&obj.shape);
-        let mut result = mesh_shape(shape.tape(), &settings);
+        let mut result = mesh_shape_with(shape.tape(), &settings, &ctl);
         let unbounded = matches!(result, Err(MeshError::Unbounded));
         if unbounded {
             settings.bounds = Some(unbounded_box(scene));
-            result = mesh_shape(shape.tape(), &settings);
+            result = mesh_shape_with(shape.tape(), &settings, &ctl);
         }
         match result {
             Ok((mut mesh, _)) => {

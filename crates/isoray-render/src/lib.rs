@@ -33,9 +33,10 @@ pub mod output;
 pub mod trace;
 mod whitted;
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::Vec3;
+use isoray_job::{CancelToken, Cancelled, Progress};
 use isoray_scene::{NormalMethod, Scene, ShadowMode, View};
 use isoray_shade::material::{blend_weight, checker, smooth_min};
 use isoray_shade::{lights, phong, to_vec3, MaterialSample};
@@ -48,13 +49,118 @@ use trace::{shadow_march, sphere_trace, sphere_trace_capped, Field, Hit, Rays, S
 /// Tile edge in pixels.
 pub const TILE: u32 = 16;
 
-/// What to compute besides the colour.
-#[derive(Debug, Default)]
+/// What to compute besides the colour, and the job's control.
+#[derive(Default)]
 pub struct RenderOptions {
     /// Compute the depth and normal AOVs (one ray through each pixel centre).
     pub aovs: bool,
-    /// Incremented once per finished tile (for progress bars).
-    pub progress: Option<std::sync::Arc<AtomicUsize>>,
+    /// Told (tiles done, tiles in all) after each tile.
+    pub progress: Option<std::sync::Arc<dyn Progress + Send>>,
+    /// Stops the render at the next tile; the render then returns [`Cancelled`].
+    pub cancel: Option<CancelToken>,
+}
+
+impl std::fmt::Debug for RenderOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RenderOptions")
+            .field("aovs", &self.aovs)
+            .field("progress", &self.progress.is_some())
+            .field("cancel", &self.cancel)
+            .finish()
+    }
+}
+
+/// A rectangle of the image, in pixels (x to the right, y down).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Region {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+}
+
+impl Region {
+    /// The whole image of the scene.
+    pub fn full(scene: &Scene) -> Region {
+        Region {
+            x0: 0,
+            y0: 0,
+            width: scene.render.width,
+            height: scene.render.height,
+        }
+    }
+
+    /// The region clipped to a `w`×`h` image.
+    fn clip(self, w: u32, h: u32) -> Region {
+        let x0 = self.x0.min(w);
+        let y0 = self.y0.min(h);
+        Region {
+            x0,
+            y0,
+            width: self.width.min(w - x0),
+            height: self.height.min(h - y0),
+        }
+    }
+}
+
+/// One pass of a progressive render.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pass {
+    /// One sample at the centre of each n×n block of pixels (aligned to
+    /// multiples of n), filling the block: a coarse preview.
+    Blocks(u32),
+    /// One sample at each pixel centre (the final image when aa = 1).
+    Pixels,
+    /// aa×aa samples per pixel: the final image, byte for byte what
+    /// [`render`] computes.
+    Final,
+}
+
+/// The progressive passes in order: 8×8, 4×4 and 2×2 blocks, every pixel,
+/// then the antialiasing samples (left out when aa = 1, where the pixel
+/// pass is already the final image).
+pub fn passes(scene: &Scene) -> Vec<Pass> {
+    let mut v = vec![Pass::Blocks(8), Pass::Blocks(4), Pass::Blocks(2)];
+    if scene.render.aa > 1 {
+        v.push(Pass::Pixels);
+    }
+    v.push(Pass::Final);
+    v
+}
+
+/// A finished tile of a pass, handed to a [`TileSink`].
+#[derive(Debug, Clone, Copy)]
+pub struct TileImage<'a> {
+    /// The pass it belongs to.
+    pub pass: Pass,
+    /// Where it goes in the image.
+    pub region: Region,
+    /// Linear RGB, row-major, `region.width × region.height`.
+    pub color: &'a [[f32; 3]],
+}
+
+/// Receives tiles as they finish (from worker threads, in any order).
+pub trait TileSink: Sync {
+    /// A tile is done.
+    fn tile(&self, tile: &TileImage);
+}
+
+/// A sink that ignores tiles.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoSink;
+
+impl TileSink for NoSink {
+    fn tile(&self, _tile: &TileImage) {}
+}
+
+impl<F: Fn(&TileImage) + Sync> TileSink for F {
+    fn tile(&self, tile: &TileImage) {
+        self(tile)
+    }
 }
 
 /// A rendered image and its AOVs, row-major from the top-left pixel.
@@ -119,6 +225,31 @@ pub fn tile_count(scene: &Scene) -> usize {
     (w.div_ceil(TILE) * h.div_ceil(TILE)) as usize
 }
 
+impl TileOut {
+    /// The part of the tile inside `region`, with its colours.
+    fn clip(&self, region: Region) -> (Region, Vec<[f32; 3]>) {
+        let x0 = self.x0.max(region.x0);
+        let y0 = self.y0.max(region.y0);
+        let x1 = (self.x0 + self.w).min(region.x0 + region.width);
+        let y1 = (self.y0 + self.h).min(region.y0 + region.height);
+        let mut color = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                color.push(self.color[((y - self.y0) * self.w + (x - self.x0)) as usize]);
+            }
+        }
+        (
+            Region {
+                x0,
+                y0,
+                width: x1 - x0,
+                height: y1 - y0,
+            },
+            color,
+        )
+    }
+}
+
 struct TileOut {
     x0: u32,
     y0: u32,
@@ -134,75 +265,199 @@ struct TileOut {
     counts: RayCounts,
 }
 
-/// Renders the scene.
+/// Renders the scene (the whole image, final pass). Without a cancel token
+/// in `opts` it cannot fail; see [`render_with`].
 pub fn render(scene: &Scene, opts: &RenderOptions) -> (RenderedImage, Stats) {
+    match render_with(scene, opts) {
+        Ok(r) => r,
+        // Only a token can cancel; a render without one always finishes.
+        Err(Cancelled) => (empty_image(scene, opts.aovs), Stats::default()),
+    }
+}
+
+fn empty_image(scene: &Scene, aovs: bool) -> RenderedImage {
     let (w, h) = (scene.render.width, scene.render.height);
+    let n = (w * h) as usize;
+    RenderedImage {
+        width: w,
+        height: h,
+        color: vec![[0.0; 3]; n],
+        depth: aovs.then(|| vec![f32::INFINITY; n]),
+        normals: aovs.then(|| vec![[0.0; 3]; n]),
+        albedo: aovs.then(|| vec![[0.0; 3]; n]),
+    }
+}
+
+/// Renders the whole image, stopping with [`Cancelled`] when `opts.cancel` is
+/// cancelled (checked before every tile).
+pub fn render_with(scene: &Scene, opts: &RenderOptions) -> Result<(RenderedImage, Stats), Cancelled> {
+    let mut img = empty_image(scene, opts.aovs);
+    let stats = render_into(scene, Region::full(scene), Pass::Final, opts, &NoSink, &mut img)?;
+    Ok((img, stats))
+}
+
+/// Renders `region` of the image in one pass, handing each finished tile
+/// to `sink`. Tiles follow the image's [`TILE`] grid, so the final pass of
+/// a region is byte for byte the same pixels as a whole render.
+pub fn render_region(
+    scene: &Scene,
+    region: Region,
+    pass: Pass,
+    opts: &RenderOptions,
+    sink: &dyn TileSink,
+) -> Result<Stats, Cancelled> {
+    let mut img = empty_image(scene, opts.aovs);
+    render_into(scene, region, pass, opts, sink, &mut img)
+}
+
+/// Renders `region` progressively: every pass of [`passes`] in turn, each
+/// tile handed to `sink` as it finishes, so a preview shows a coarse image
+/// at once and refines it. Returns the final image (pixels outside
+/// `region` are black) and the stats of the final pass.
+pub fn render_progressive(
+    scene: &Scene,
+    region: Region,
+    opts: &RenderOptions,
+    sink: &dyn TileSink,
+) -> Result<(RenderedImage, Stats), Cancelled> {
+    let mut img = empty_image(scene, opts.aovs);
+    let mut stats = Stats::default();
+    for pass in passes(scene) {
+        let pass_opts = RenderOptions {
+            aovs: opts.aovs && pass == Pass::Final,
+            progress: opts.progress.clone(),
+            cancel: opts.cancel.clone(),
+        };
+        stats = render_into(scene, region, pass, &pass_opts, sink, &mut img)?;
+    }
+    Ok((img, stats))
+}
+
+/// The tiles of the image grid that meet `region`.
+fn grid_tiles(w: u32, h: u32, region: Region) -> Vec<(u32, u32)> {
+    if region.width == 0 || region.height == 0 {
+        return Vec::new();
+    }
+    let (tx0, ty0) = (region.x0 / TILE, region.y0 / TILE);
+    let (tx1, ty1) = (
+        (region.x0 + region.width).div_ceil(TILE).min(w.div_ceil(TILE)),
+        (region.y0 + region.height).div_ceil(TILE).min(h.div_ceil(TILE)),
+    );
+    (ty0..ty1)
+        .flat_map(|ty| (tx0..tx1).map(move |tx| (tx * TILE, ty * TILE)))
+        .collect()
+}
+
+fn render_into(
+    scene: &Scene,
+    region: Region,
+    pass: Pass,
+    opts: &RenderOptions,
+    sink: &dyn TileSink,
+    img: &mut RenderedImage,
+) -> Result<Stats, Cancelled> {
+    let (w, h) = (scene.render.width, scene.render.height);
+    let region = region.clip(w, h);
     let cam = RayCamera::new(&scene.camera, w, h);
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
-        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
-        .collect();
+    let tiles = grid_tiles(w, h, region);
     let ctx = Ctx::new(scene, cam);
-    let outs: Vec<TileOut> = tiles
+    let done = AtomicU64::new(0);
+    let total = tiles.len() as u64;
+    let outs: Vec<Option<TileOut>> = tiles
         .par_iter()
         .map_init(
             || Worker::new(&ctx),
             |wk, &(x0, y0)| {
-                let out = wk.tile(&ctx, x0, y0, TILE.min(w - x0), TILE.min(h - y0), opts.aovs);
-                if let Some(p) = &opts.progress {
-                    p.fetch_add(1, Ordering::Relaxed);
+                if opts.cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
+                    return None;
                 }
-                out
+                let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
+                let out = wk.tile(&ctx, x0, y0, tw, th, opts.aovs, pass);
+                let clip = out.clip(region);
+                sink.tile(&TileImage {
+                    pass,
+                    region: clip.0,
+                    color: &clip.1,
+                });
+                if let Some(p) = &opts.progress {
+                    p.update(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+                }
+                Some(out)
             },
         )
         .collect();
-    let n = (w * h) as usize;
-    let mut img = RenderedImage {
-        width: w,
-        height: h,
-        color: vec![[0.0; 3]; n],
-        depth: opts.aovs.then(|| vec![f32::INFINITY; n]),
-        normals: opts.aovs.then(|| vec![[0.0; 3]; n]),
-        albedo: opts.aovs.then(|| vec![[0.0; 3]; n]),
-    };
+    if opts.cancel.as_ref().is_some_and(|c| c.is_cancelled()) || outs.iter().any(Option::is_none) {
+        return Err(Cancelled);
+    }
     let mut evals = 0;
     let (mut overshoots, mut worst) = (0, 0.0f32);
     let mut counts = RayCounts::default();
-    for t in outs {
+    for t in outs.into_iter().flatten() {
         evals += t.evals;
         counts += t.counts;
         overshoots += t.overshoots;
         worst = worst.max(t.worst_overshoot);
         for j in 0..t.h {
             for i in 0..t.w {
+                let (x, y) = (t.x0 + i, t.y0 + j);
+                if x < region.x0 || y < region.y0 || x >= region.x0 + region.width || y >= region.y0 + region.height {
+                    continue;
+                }
                 let src = (j * t.w + i) as usize;
-                let dst = ((t.y0 + j) * w + t.x0 + i) as usize;
+                let dst = (y * w + x) as usize;
                 img.color[dst] = t.color[src];
-                if let Some(d) = &mut img.depth {
+                if let (Some(d), false) = (&mut img.depth, t.depth.is_empty()) {
                     d[dst] = t.depth[src];
                 }
-                if let Some(nm) = &mut img.normals {
+                if let (Some(nm), false) = (&mut img.normals, t.normals.is_empty()) {
                     nm[dst] = t.normals[src];
                 }
-                if let Some(al) = &mut img.albedo {
+                if let (Some(al), false) = (&mut img.albedo, t.albedo.is_empty()) {
                     al[dst] = t.albedo[src];
                 }
             }
         }
     }
-    let aa = scene.render.aa as u64;
-    (
-        img,
-        Stats {
-            primary_rays: n as u64 * aa * aa,
-            evaluations: evals,
-            overshoots,
-            overshoot_factor: worst,
-            rays: RayCounts {
-                primary: n as u64 * aa * aa,
-                ..counts
-            },
+    let spp = match pass {
+        Pass::Final => (scene.render.aa * scene.render.aa) as u64,
+        _ => 1,
+    };
+    let pixels = region.width as u64 * region.height as u64;
+    Ok(Stats {
+        primary_rays: pixels * spp,
+        evaluations: evals,
+        overshoots,
+        overshoot_factor: worst,
+        rays: RayCounts {
+            primary: pixels * spp,
+            ..counts
         },
-    )
+    })
+}
+
+/// The top-left corners of the n×n blocks (aligned to multiples of n)
+/// whose centre lies in the tile at (x0, y0) of size tw×th.
+fn block_grid(x0: u32, y0: u32, tw: u32, th: u32, n: u32) -> Vec<(u32, u32)> {
+    let centre_in = |b: u32, lo: u32, len: u32| {
+        let c2 = 2 * b + n; // twice the centre
+        c2 >= 2 * lo && c2 < 2 * (lo + len)
+    };
+    let first = |lo: u32| (lo / n).saturating_sub(1) * n;
+    let mut out = Vec::new();
+    let mut by = first(y0);
+    while by < y0 + th {
+        if centre_in(by, y0, th) {
+            let mut bx = first(x0);
+            while bx < x0 + tw {
+                if centre_in(bx, x0, tw) {
+                    out.push((bx, by));
+                }
+                bx += n;
+            }
+        }
+        by += n;
+    }
+    out
 }
 
 /// Read-only render context shared by all workers.
@@ -381,13 +636,52 @@ impl<'s> Worker<'s> {
         (hs, evals)
     }
 
-    fn tile(&mut self, ctx: &Ctx, x0: u32, y0: u32, tw: u32, th: u32, aovs: bool) -> TileOut {
+    #[allow(clippy::too_many_arguments)]
+    fn tile(&mut self, ctx: &Ctx, x0: u32, y0: u32, tw: u32, th: u32, aovs: bool, pass: Pass) -> TileOut {
         let s = &ctx.scene.render;
-        let aa = s.aa;
+        let (aa, block) = match pass {
+            Pass::Final => (s.aa, 1),
+            Pass::Pixels => (1, 1),
+            // Blocks must not straddle tiles: n is a power of two up to TILE.
+            Pass::Blocks(n) => (1, n.clamp(1, TILE).next_power_of_two().min(TILE)),
+        };
         self.tile_origin = (x0, y0);
         let origin = ctx.cam.origin().as_vec3().to_array();
-        // Primary rays: aa×aa per pixel at the centres of a uniform sub-grid.
         self.rays.clear();
+        if block > 1 {
+            // One ray at the centre of each block (blocks aligned to the image).
+            let blocks = block_grid(x0, y0, tw, th, block);
+            for &(bx, by) in &blocks {
+                let c = block as f64 * 0.5;
+                let d = ctx.cam.direction(bx as f64 + c, by as f64 + c);
+                self.rays.push(origin, d.as_vec3().to_array());
+            }
+            let (hs, mut evals) = self.trace_and_normals(ctx, false);
+            let samples = self.shade_samples(ctx, hs, &mut evals);
+            let mut color = vec![[0.0f32; 3]; (tw * th) as usize];
+            for (&(bx, by), c) in blocks.iter().zip(&samples) {
+                for y in by.max(y0)..(by + block).min(y0 + th) {
+                    for x in bx.max(x0)..(bx + block).min(x0 + tw) {
+                        color[((y - y0) * tw + (x - x0)) as usize] = c.to_array();
+                    }
+                }
+            }
+            return TileOut {
+                x0,
+                y0,
+                w: tw,
+                h: th,
+                color,
+                depth: Vec::new(),
+                normals: Vec::new(),
+                albedo: Vec::new(),
+                evals,
+                overshoots: std::mem::take(&mut self.scratch.overshoots),
+                worst_overshoot: std::mem::take(&mut self.scratch.worst_overshoot),
+                counts: std::mem::take(&mut self.counts),
+            };
+        }
+        // Primary rays: aa×aa per pixel at the centres of a uniform sub-grid.
         for j in 0..th {
             for i in 0..tw {
                 for sy in 0..aa {
@@ -400,20 +694,7 @@ impl<'s> Worker<'s> {
             }
         }
         let (hs, mut evals) = self.trace_and_normals(ctx, false);
-        let mut samples = vec![to_vec3(s.background); self.rays.len()];
-        match s.view {
-            View::Steps => {
-                for (i, h) in self.hits.iter().enumerate() {
-                    samples[i] = heat(h.steps as f32 / s.max_steps as f32);
-                }
-            }
-            View::Normals => {
-                for (k, &i) in hs.idx.iter().enumerate() {
-                    samples[i] = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]) * 0.5 + 0.5;
-                }
-            }
-            View::Shaded => evals += self.trace_paths(ctx, hs, &mut samples),
-        }
+        let samples = self.shade_samples(ctx, hs, &mut evals);
         let spp = (aa * aa) as usize;
         let inv = 1.0 / spp as f32;
         let color: Vec<[f32; 3]> = samples
@@ -457,6 +738,27 @@ impl<'s> Worker<'s> {
             worst_overshoot: std::mem::take(&mut self.scratch.worst_overshoot),
             counts: std::mem::take(&mut self.counts),
         }
+    }
+
+    /// The colour of each primary ray of `self.rays` (traced into `hs`), as
+    /// the scene's view asks: shaded, the step count or the normal.
+    fn shade_samples(&mut self, ctx: &Ctx, hs: HitSet, evals: &mut u64) -> Vec<Vec3> {
+        let s = &ctx.scene.render;
+        let mut samples = vec![to_vec3(s.background); self.rays.len()];
+        match s.view {
+            View::Steps => {
+                for (i, h) in self.hits.iter().enumerate() {
+                    samples[i] = heat(h.steps as f32 / s.max_steps as f32);
+                }
+            }
+            View::Normals => {
+                for (k, &i) in hs.idx.iter().enumerate() {
+                    samples[i] = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]) * 0.5 + 0.5;
+                }
+            }
+            View::Shaded => *evals += self.trace_paths(ctx, hs, &mut samples),
+        }
+        samples
     }
 
     /// Local shading of the hits of `self.rays`: emission, ambient (with

@@ -77,7 +77,7 @@ fn check(case: &Case) {
         &scene,
         &RenderOptions {
             aovs: true,
-            progress: None,
+            ..RenderOptions::default()
         },
     );
     let depth = img.depth.unwrap();

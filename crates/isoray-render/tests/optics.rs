@@ -606,7 +606,7 @@ shape = "torus(p - vec3(1.2, 0.4, 0.0), 0.7, 0.3)"
 "#;
     let aovs = RenderOptions {
         aovs: true,
-        progress: None,
+        ..RenderOptions::default()
     };
     let closed = load_str(text, "a.toml", &[]).unwrap();
     assert!(closed.analytic[0].is_some() && closed.analytic[1].is_some() && closed.analytic[2].is_none());

@@ -14,7 +14,7 @@ fn scene(text: &str, overrides: &[&str]) -> Scene {
 fn aovs() -> RenderOptions {
     RenderOptions {
         aovs: true,
-        progress: None,
+        ..RenderOptions::default()
     }
 }
 

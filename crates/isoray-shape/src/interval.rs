@@ -304,6 +304,32 @@ mod tests {
         assert!(r.lo >= 1.0 - 1e-9 && r.hi <= 2.0 + 1e-9, "{r:?}");
     }
 
+    /// Regressions the conformance suite found (tests/conformance.rs).
+    #[test]
+    fn awkward_arguments() {
+        use std::f64::consts::FRAC_PI_2;
+        let p = Interval::point;
+        // sin/cos of a huge point terminate (the crest search used to loop
+        // forever once k + 1 = k) and contain the value; cos is not a shifted
+        // sine, which is an ulp of the shifted argument off.
+        for x in [1e300, 4503599627370497.0, 1e10, -746.0] {
+            assert!(Interval::unary(UnOp::Sin, p(x)).contains(x.sin()), "sin {x}");
+            assert!(Interval::unary(UnOp::Cos, p(x)).contains(x.cos()), "cos {x}");
+        }
+        // tan over an interval that straddles π/2 (FRAC_PI_2 lies below it).
+        let up1 = f64::from_bits(FRAC_PI_2.to_bits() + 1);
+        assert_eq!(Interval::unary(UnOp::Tan, Interval::new(FRAC_PI_2, up1 + 1e-15)), WHOLE);
+        // a / b with a subnormal b: 1/b overflows, a/b does not.
+        let q = Interval::binary(BinOp::Div, p(1e-310), p(1e-310));
+        assert!(q.contains(1.0), "{q:?}");
+        // Negative powers decrease: the widening goes outwards.
+        let r = Interval::binary(BinOp::Pow, Interval::new(1.0, 2.0), p(-1.0));
+        assert!(r.contains(1.0) && r.contains(0.5), "{r:?}");
+        // High integer powers are as accurate as powf.
+        let x: f64 = -2.997;
+        assert!(Interval::binary(BinOp::Pow, p(x), p(63.0)).contains(x.powf(63.0)));
+    }
+
     #[test]
     fn contains_every_sampled_value() {
         let lib = Library::new();

@@ -9,12 +9,12 @@ mod raster_cmd;
 use std::io::{BufRead, BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use clap::{Parser, Subcommand};
-use isoray_render::{output, render, tile_count, RenderOptions};
+use isoray_job::Counter;
+use isoray_render::{output, render_with, tile_count, RenderOptions};
 use isoray_scene::{load_with, LoadOptions, Scene, SceneError};
 
 /// Model implicit surfaces and render them with rays.
@@ -557,20 +557,24 @@ fn cmd_render(
         .num_threads(threads.unwrap_or(0))
         .build()
         .map_err(|e| io_failure(format!("cannot start worker threads: {e}")))?;
-    let progress = Arc::new(AtomicUsize::new(0));
+    let progress = Arc::new(Counter::default());
     let opts = RenderOptions {
         aovs: depth.is_some() || normals.is_some() || albedo.is_some(),
         progress: Some(progress.clone()),
+        cancel: Some(jobs::cancel_token()),
     };
     let start = Instant::now();
-    let (image, stats) = std::thread::scope(|sc| {
-        let handle = sc.spawn(|| pool.install(|| render(&scene, &opts)));
+    let result = std::thread::scope(|sc| {
+        let handle = sc.spawn(|| pool.install(|| render_with(&scene, &opts)));
         if !quiet {
             show_progress(&handle, &progress, tile_count(&scene), start);
         }
         handle.join()
     })
     .map_err(|_| io_failure("the renderer failed unexpectedly".into()))?;
+    let Ok((image, stats)) = result else {
+        return Err(jobs::cancelled());
+    };
     let elapsed = start.elapsed().as_secs_f64();
     let w = |r: Result<(), output::OutputError>| r.map_err(|e| io_failure(e.to_string()));
     w(output::write_png(out, image.width, image.height, &image.color))?;
@@ -608,7 +612,7 @@ fn cmd_render(
     Ok(())
 }
 
-fn show_progress<T>(handle: &std::thread::ScopedJoinHandle<'_, T>, done: &AtomicUsize, total: usize, start: Instant) {
+fn show_progress<T>(handle: &std::thread::ScopedJoinHandle<'_, T>, done: &Counter, total: usize, start: Instant) {
     let mut bar: Option<indicatif::ProgressBar> = None;
     while !handle.is_finished() {
         std::thread::sleep(Duration::from_millis(50));
@@ -624,7 +628,7 @@ fn show_progress<T>(handle: &std::thread::ScopedJoinHandle<'_, T>, done: &Atomic
             bar = Some(b);
         }
         if let Some(b) = &bar {
-            b.set_position(done.load(Ordering::Relaxed) as u64);
+            b.set_position(done.done());
         }
     }
     if let Some(b) = bar {

@@ -9,7 +9,7 @@ use std::time::Instant;
 use clap::ValueEnum;
 use isoray_mesh::parametric::{tessellate, TessellationSettings};
 use isoray_raster::render::{raster_meshes, HiddenSurface, RasterOptions, ReflectionMethod, ShadowMethod};
-use isoray_raster::scene::{mesh_scene, MeshedScene};
+use isoray_raster::scene::{mesh_scene_with, MeshedScene};
 use isoray_raster::shading::Shading;
 use isoray_render::output;
 use isoray_scene::Scene;
@@ -131,6 +131,7 @@ pub(crate) fn cmd_raster(a: &RasterArgs) -> Result<(), Failure> {
         },
         map_size: a.map_size.map_or(RasterOptions::default().map_size, |m| m as usize),
         probes: a.error_vs_raytrace.is_some(),
+        cancel: Some(crate::jobs::cancel_token()),
         ..RasterOptions::default()
     };
     let pool = rayon::ThreadPoolBuilder::new()
@@ -140,10 +141,18 @@ pub(crate) fn cmd_raster(a: &RasterArgs) -> Result<(), Failure> {
     let start = Instant::now();
     let image = pool.install(|| -> Result<_, Failure> {
         let t0 = Instant::now();
-        let mut meshed = mesh_scene(&scene, opts.resolution).map_err(|e| io_failure(e.to_string()))?;
+        let cancel = crate::jobs::cancel_token();
+        let mut meshed = mesh_scene_with(&scene, opts.resolution, Some(&cancel)).map_err(|e| {
+            if e.source == isoray_mesh::MeshError::Cancelled {
+                crate::jobs::cancelled()
+            } else {
+                io_failure(e.to_string())
+            }
+        })?;
         add_extras(a, &scene, &mut meshed)?;
         let mesh_secs = t0.elapsed().as_secs_f64();
         let mut image = raster_meshes(&scene, &meshed, &opts).map_err(|e| match e {
+            isoray_raster::render::RasterError::Cancelled => crate::jobs::cancelled(),
             isoray_raster::render::RasterError::Mesh(_) => io_failure(e.to_string()),
             _ => usage(e.to_string()),
         })?;
