@@ -18,6 +18,10 @@
 //! Errors name the file, line and column (or the `--set` override) and say
 //! what was expected; see [`SceneError`].
 
+// A SceneError carries its rendered report and its structure (key, span,
+// label, notes) for editors; loads are not a hot path, so its size is fine.
+#![allow(clippy::result_large_err)]
+
 pub mod analytic;
 pub mod doc;
 pub mod env;

@@ -17,6 +17,7 @@
 //! counter-clockwise when looking down the axis towards the origin.
 
 pub mod algebraic;
+pub mod conformance;
 pub mod diag;
 pub mod eval;
 pub mod interval;

@@ -15,8 +15,14 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use crate::ir::{BinOp, Builder, Node, Op, UnOp};
 
-/// Stands for ±∞ in interval endpoints (finite so f32 arithmetic stays NaN-free).
-const BIG: f64 = 1e18;
+/// Stands for ±∞ in the ends of the intervals written into the DAG (finite
+/// so f32 arithmetic stays NaN-free): the rules work on the saturated line
+/// [−BIG, BIG].
+pub const BIG: f64 = 1e18;
+
+/// exp's argument is clamped here: exp 42 ≈ 1.7e18 is beyond [`BIG`], so a
+/// larger argument still gives a saturated end, and is finite in f32.
+const EXP_CLAMP: f64 = 42.0;
 
 /// Copies the DAG of `n` from `src` into `dst`, with the coordinates X, Y, Z
 /// of `src` replaced by the nodes `p`.
@@ -111,15 +117,17 @@ impl IntervalWriter<'_> {
         }
     }
 
-    /// sin over [lo + shift, hi + shift]: ±1 where the interval contains a
-    /// crest or trough, else the endpoint values.
-    fn trig(b: &mut Builder, a: Iv, shift: f64) -> Iv {
-        let lo = b.add_c(a.lo, shift);
-        let hi = b.add_c(a.hi, shift);
-        let (sl, sh) = (b.unary(UnOp::Sin, lo), b.unary(UnOp::Sin, hi));
+    /// sin or cos (`op`) over [lo, hi]: ±1 where the interval contains a
+    /// crest or trough (at `crest` + 2πk and `crest` + π + 2πk), else the
+    /// values at the ends. The ends are evaluated with `op` itself: cos as a
+    /// shifted sine is off by an ulp of the shifted argument, which is far
+    /// more than an ulp of the result for large arguments.
+    fn trig(b: &mut Builder, a: Iv, op: UnOp, crest: f64) -> Iv {
+        let (lo, hi) = (a.lo, a.hi);
+        let (sl, sh) = (b.unary(op, lo), b.unary(op, hi));
         let ends_lo = b.min(sl, sh);
         let ends_hi = b.max(sl, sh);
-        // A crest π/2 + 2πk lies in [lo, hi] when ⌊(hi − π/2)/2π⌋ > ⌊(lo − π/2)/2π⌋.
+        // A point φ + 2πk lies in (lo, hi] when ⌊(hi − φ)/2π⌋ > ⌊(lo − φ)/2π⌋.
         let contains = |b: &mut Builder, phase: f64| {
             let u = b.add_c(hi, -phase);
             let u = b.mul_c(u, 1.0 / (2.0 * PI));
@@ -129,13 +137,31 @@ impl IntervalWriter<'_> {
             let v = b.unary(UnOp::Floor, v);
             b.sub(u, v)
         };
-        let crest = contains(b, FRAC_PI_2);
-        let trough = contains(b, -FRAC_PI_2);
+        let has_crest = contains(b, crest);
+        let has_trough = contains(b, crest - PI);
         let (one, minus) = (b.constant(1.0), b.constant(-1.0));
         Iv {
-            lo: b.select(trough, minus, ends_lo),
-            hi: b.select(crest, one, ends_hi),
+            lo: b.select(has_trough, minus, ends_lo),
+            hi: b.select(has_crest, one, ends_hi),
         }
+    }
+
+    /// ln over [lo, hi] (clamped to [0, BIG]), with −BIG for ln 0 = −∞.
+    fn ln(b: &mut Builder, a: Iv) -> Iv {
+        let c = Self::clamp(b, a, 0.0, BIG);
+        let l = Self::monotone(b, UnOp::Ln, c);
+        let m = b.constant(-BIG);
+        Iv {
+            lo: b.max(l.lo, m),
+            hi: b.max(l.hi, m),
+        }
+    }
+
+    /// exp over [lo, hi]: the arguments are clamped at 42, where exp is
+    /// beyond BIG already (exp 42 ≈ 1.7e18), so the result saturates.
+    fn exp(b: &mut Builder, a: Iv) -> Iv {
+        let c = Self::clamp(b, a, -BIG, EXP_CLAMP);
+        Self::monotone(b, UnOp::Exp, c)
     }
 
     fn whole(b: &mut Builder) -> Iv {
@@ -177,8 +203,8 @@ impl IntervalWriter<'_> {
                         let c = Self::clamp(b, a, 0.0, BIG);
                         Self::monotone(b, UnOp::Sqrt, c)
                     }
-                    UnOp::Sin => Self::trig(b, a, 0.0),
-                    UnOp::Cos => Self::trig(b, a, FRAC_PI_2),
+                    UnOp::Sin => Self::trig(b, a, UnOp::Sin, FRAC_PI_2),
+                    UnOp::Cos => Self::trig(b, a, UnOp::Cos, 0.0),
                     UnOp::Tan => Self::whole(b),
                     UnOp::Asin => {
                         let c = Self::clamp(b, a, -1.0, 1.0);
@@ -191,14 +217,8 @@ impl IntervalWriter<'_> {
                             hi: b.unary(UnOp::Acos, c.lo),
                         }
                     }
-                    UnOp::Exp => {
-                        let c = Self::clamp(b, a, -BIG, 40.0);
-                        Self::monotone(b, UnOp::Exp, c)
-                    }
-                    UnOp::Ln => {
-                        let c = Self::clamp(b, a, 1e-30, BIG);
-                        Self::monotone(b, UnOp::Ln, c)
-                    }
+                    UnOp::Exp => Self::exp(b, a),
+                    UnOp::Ln => Self::ln(b, a),
                     UnOp::Atan | UnOp::Floor | UnOp::Round | UnOp::Sign => Self::monotone(b, op, a),
                 }
             }
@@ -244,12 +264,17 @@ impl IntervalWriter<'_> {
                         hi: b.max(xi.hi, yi.hi),
                     },
                     BinOp::Pow => {
-                        // x^y = exp(y · ln x) for x > 0.
-                        let lx = Self::clamp(b, xi, 1e-30, BIG);
-                        let lx = Self::monotone(b, UnOp::Ln, lx);
+                        // x^y = exp(y · ln x) for x > 0; a base that may be
+                        // 0 or negative (where integer exponents give
+                        // values of either sign) gives everything.
+                        let lx = Self::ln(b, xi);
                         let e = Self::mul(b, yi, lx);
-                        let e = Self::clamp(b, e, -BIG, 40.0);
-                        Self::monotone(b, UnOp::Exp, e)
+                        let r = Self::exp(b, e);
+                        let w = Self::whole(b);
+                        Iv {
+                            lo: b.select(xi.lo, r.lo, w.lo),
+                            hi: b.select(xi.lo, r.hi, w.hi),
+                        }
                     }
                     BinOp::Atan2 => Iv {
                         lo: b.constant(-PI),
@@ -279,32 +304,72 @@ impl IntervalWriter<'_> {
     /// x^k for a constant k.
     fn power(&mut self, b: &mut Builder, n: Node, x: Iv, k: f64) -> Iv {
         let e = b.constant(k);
-        let out = if k.fract() == 0.0 && k >= 0.0 {
-            if (k as i64) % 2 == 0 {
-                let m = Self::abs(b, x);
-                Iv {
-                    lo: b.binary(BinOp::Pow, m.lo, e),
-                    hi: b.binary(BinOp::Pow, m.hi, e),
-                }
+        let integer = k.fract() == 0.0;
+        let even = integer && k % 2.0 == 0.0;
+        let out = if k >= 0.0 {
+            // Increasing on the base: |x| for even powers, x ≥ 0 for real ones.
+            let base = if even {
+                Self::abs(b, x)
+            } else if integer {
+                x
             } else {
-                Iv {
-                    lo: b.binary(BinOp::Pow, x.lo, e),
-                    hi: b.binary(BinOp::Pow, x.hi, e),
-                }
+                Self::clamp(b, x, 0.0, BIG)
+            };
+            Iv {
+                lo: b.binary(BinOp::Pow, base.lo, e),
+                hi: b.binary(BinOp::Pow, base.hi, e),
+            }
+        } else if even || !integer {
+            // Decreasing on the base (|x|, or x ≥ 0), with a pole at 0: BIG at
+            // a base end at or below TINY, where x^k may be as large as it likes.
+            let base = if even {
+                Self::abs(b, x)
+            } else {
+                Self::clamp(b, x, 0.0, BIG)
+            };
+            let c = Self::clamp(b, base, TINY, BIG);
+            let big = b.constant(BIG);
+            let (pl, ph) = (b.binary(BinOp::Pow, c.lo, e), b.binary(BinOp::Pow, c.hi, e));
+            let (pl, ph) = (b.min(pl, big), b.min(ph, big));
+            let above = b.add_c(base.lo, -TINY);
+            Iv {
+                lo: ph,
+                hi: b.select(above, pl, big),
             }
         } else {
-            // Real powers need x ≥ 0 (and x > 0 for negative ones).
-            let c = Self::clamp(b, x, if k < 0.0 { 1e-30 } else { 0.0 }, BIG);
+            // Odd negative powers: decreasing on each side of the pole at 0,
+            // odd; everything when the interval reaches 0.
+            let c = Self::clamp(b, x, -BIG, BIG);
             let (pl, ph) = (b.binary(BinOp::Pow, c.lo, e), b.binary(BinOp::Pow, c.hi, e));
-            if k >= 0.0 {
-                Iv { lo: pl, hi: ph }
-            } else {
-                Iv { lo: ph, hi: pl }
+            let r = Self::clamp(b, Iv { lo: ph, hi: pl }, -BIG, BIG);
+            let same_sign = b.mul(x.lo, x.hi);
+            let w = Self::whole(b);
+            Iv {
+                lo: b.select(same_sign, r.lo, w.lo),
+                hi: b.select(same_sign, r.hi, w.hi),
             }
         };
         self.memo.insert(n, out);
         out
     }
+}
+
+/// Bases at or below this count as 0 for negative powers (finite in f32).
+const TINY: f64 = 1e-30;
+
+/// Writes the interval extension of `n` (a node of `src`) into `dst`, over the
+/// box whose x, y and z ranges are the `(lo, hi)` node pairs `bx` of `dst`,
+/// with the rules the Lipschitz bound uses; returns the `(lo, hi)` nodes.
+/// Ends of ±[`BIG`] stand for ±∞. Public so that the interval rules can be
+/// checked one operation at a time (see [`crate::conformance`]).
+pub fn interval_extension(src: &Builder, n: Node, dst: &mut Builder, bx: [(Node, Node); 3]) -> (Node, Node) {
+    let mut w = IntervalWriter {
+        src,
+        bx: bx.map(|(lo, hi)| Iv { lo, hi }),
+        memo: HashMap::new(),
+    };
+    let iv = w.write(dst, n);
+    (iv.lo, iv.hi)
 }
 
 /// Writes the sup of |∇f| over the cube of half-width `r` around `p`.
