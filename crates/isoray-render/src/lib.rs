@@ -292,7 +292,7 @@ fn empty_image(scene: &Scene, aovs: bool) -> RenderedImage {
 /// cancelled (checked before every tile).
 pub fn render_with(scene: &Scene, opts: &RenderOptions) -> Result<(RenderedImage, Stats), Cancelled> {
     let mut img = empty_image(scene, opts.aovs);
-    let stats = render_into(scene, Region::full(scene), Pass::Final, opts, &NoSink, &mut img)?;
+    let stats = render_into(scene, Region::full(scene), Pass::Final, opts, &NoSink, Some(&mut img))?;
     Ok((img, stats))
 }
 
@@ -306,8 +306,7 @@ pub fn render_region(
     opts: &RenderOptions,
     sink: &dyn TileSink,
 ) -> Result<Stats, Cancelled> {
-    let mut img = empty_image(scene, opts.aovs);
-    render_into(scene, region, pass, opts, sink, &mut img)
+    render_into(scene, region, pass, opts, sink, None)
 }
 
 /// Renders `region` progressively: every pass of [`passes`] in turn, each
@@ -328,7 +327,7 @@ pub fn render_progressive(
             progress: opts.progress.clone(),
             cancel: opts.cancel.clone(),
         };
-        stats = render_into(scene, region, pass, &pass_opts, sink, &mut img)?;
+        stats = render_into(scene, region, pass, &pass_opts, sink, Some(&mut img))?;
     }
     Ok((img, stats))
 }
@@ -354,7 +353,7 @@ fn render_into(
     pass: Pass,
     opts: &RenderOptions,
     sink: &dyn TileSink,
-    img: &mut RenderedImage,
+    mut img: Option<&mut RenderedImage>,
 ) -> Result<Stats, Cancelled> {
     let (w, h) = (scene.render.width, scene.render.height);
     let region = region.clip(w, h);
@@ -397,6 +396,7 @@ fn render_into(
         counts += t.counts;
         overshoots += t.overshoots;
         worst = worst.max(t.worst_overshoot);
+        let Some(img) = img.as_deref_mut() else { continue };
         for j in 0..t.h {
             for i in 0..t.w {
                 let (x, y) = (t.x0 + i, t.y0 + j);

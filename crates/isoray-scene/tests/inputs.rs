@@ -180,3 +180,15 @@ fn expression_errors_point_into_the_value() {
     );
     assert_eq!(e.line, Some(2));
 }
+
+#[test]
+fn closed_forms_follow_parameters() {
+    let mut s = scene("[params]\nr = 0.7\n[[object]]\nshape = \"sphere(p - vec3(1.0, 0.0, 0.0), r)\"\n");
+    let radius = |s: &Scene| match s.analytic[0] {
+        Some(isoray_scene::analytic::Analytic::Sphere { r, .. }) => r,
+        other => panic!("{other:?}"),
+    };
+    assert!((radius(&s) - 0.7).abs() < 1e-9);
+    s.set_param("r", Value::Float(0.9)).unwrap();
+    assert!((radius(&s) - 0.9).abs() < 1e-9);
+}
