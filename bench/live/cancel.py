@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Cancel latency of `isoray render` (issue: Ctrl-C stops any long command
+"""Cancel latency of `isoray render` (or `raster`) (issue: Ctrl-C stops any long command
 within 0.2 s, exit code 130, leaving any existing output untouched).
 
 Starts `isoray render SCENE --width 1280 --height 720` N times, sends SIGINT
@@ -8,6 +8,7 @@ from the signal to the process's exit. Checks the exit code (130) and that
 the output file, written before the run, is byte for byte what it was.
 
     python3 bench/live/cancel.py [--isoray target/release/isoray] [--scene examples/showcase.toml] [--runs 10]
+    python3 bench/live/cancel.py --command raster --scene examples/reflections.toml -- --shadows envmap --reflections abuffer-map
 """
 import argparse
 import os
@@ -26,11 +27,13 @@ def main():
     ap.add_argument("--scene", default="examples/showcase.toml")
     ap.add_argument("--runs", type=int, default=10)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--command", default="render", help="render or raster")
+    ap.add_argument("extra", nargs="*", help="more arguments for the command")
     a = ap.parse_args()
     rnd = random.Random(a.seed)
     out = os.path.join(tempfile.mkdtemp(), "out.png")
     sentinel = b"an earlier output that Ctrl-C must not touch"
-    args = [a.isoray, "render", a.scene, "--width", "1280", "--height", "720", "-q", "-o", out]
+    args = [a.isoray, a.command, a.scene, "--width", "1280", "--height", "720", "-q", "-o", out] + a.extra
     # How long a whole render takes, to pick moments inside it.
     t0 = time.monotonic()
     subprocess.run(args, check=True)

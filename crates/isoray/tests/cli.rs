@@ -546,3 +546,27 @@ fn set_writes_a_scene_that_renders_like_the_overrides() {
     assert!(stderr(&o).contains("render.aa"), "{}", stderr(&o));
     assert_eq!(std::fs::read(&saved).unwrap(), before);
 }
+
+#[test]
+fn ctrl_c_stops_a_render_with_130_and_writes_nothing() {
+    let out = tmp("cancelled.png");
+    std::fs::write(&out, b"an earlier output").unwrap();
+    let mut child = isoray()
+        .arg("render")
+        .arg(examples().join("showcase.toml"))
+        .args(["--width", "1280", "--height", "720", "--aa", "2", "-q", "-o"])
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(400));
+    let sent = std::time::Instant::now();
+    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status();
+    assert!(kill.is_ok_and(|s| s.success()), "kill -INT");
+    let status = child.wait().unwrap();
+    let waited = sent.elapsed();
+    assert_eq!(status.code(), Some(130));
+    assert_eq!(std::fs::read(&out).unwrap(), b"an earlier output");
+    // The renderer stops within a tile; the grace period bounds the rest.
+    assert!(waited < std::time::Duration::from_secs(2), "{waited:?}");
+}
