@@ -103,6 +103,7 @@ impl Stage {
 /// Progress reporting and cancellation for long meshing runs.
 pub struct Control<'a> {
     progress: Option<&'a (dyn Fn(Stage, f64) + Sync)>,
+    job: Option<&'a dyn isoray_job::Progress>,
     cancel: Option<&'a AtomicBool>,
 }
 
@@ -111,20 +112,37 @@ impl<'a> Control<'a> {
     pub fn none() -> Control<'static> {
         Control {
             progress: None,
+            job: None,
             cancel: None,
+        }
+    }
+
+    /// Reports to an [`isoray_job::Progress`] (each stage by its name, then
+    /// per-mille updates) and stops soon after `cancel` is cancelled: the
+    /// job control every long isoray operation takes.
+    pub fn job(progress: &'a dyn isoray_job::Progress, cancel: &'a isoray_job::CancelToken) -> Self {
+        Control {
+            progress: None,
+            job: Some(progress),
+            cancel: Some(cancel.flag()),
         }
     }
 
     /// Reports `(stage, fraction done)` to `progress` and stops with
     /// [`MeshError::Cancelled`] soon after `cancel` becomes true.
     pub fn new(progress: Option<&'a (dyn Fn(Stage, f64) + Sync)>, cancel: Option<&'a AtomicBool>) -> Self {
-        Control { progress, cancel }
+        Control {
+            progress,
+            job: None,
+            cancel,
+        }
     }
 
     /// The same cancellation without progress reports.
     pub(crate) fn silent(other: &Control<'a>) -> Control<'a> {
         Control {
             progress: None,
+            job: None,
             cancel: other.cancel,
         }
     }
@@ -132,6 +150,12 @@ impl<'a> Control<'a> {
     pub(crate) fn progress(&self, stage: Stage, fraction: f64) {
         if let Some(p) = self.progress {
             p(stage, fraction);
+        }
+        if let Some(j) = self.job {
+            if fraction <= 0.0 {
+                j.stage(stage.name());
+            }
+            j.update((fraction.clamp(0.0, 1.0) * 1000.0) as u64, 1000);
         }
     }
 

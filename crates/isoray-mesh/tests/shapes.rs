@@ -298,3 +298,36 @@ fn the_box_given_is_the_box_meshed() {
     assert!(b[0][2] >= -0.3 - 1e-6 && b[1][2] <= 0.3 + 1e-6, "{b:?}");
     assert!(b[1][2] > 0.29, "{b:?}");
 }
+
+#[test]
+fn job_control_reports_stages_and_cancels() {
+    use isoray_job::{CancelToken, Progress};
+    use isoray_mesh::{mesh_shape_with, Control, MeshError};
+    struct Stages(std::sync::Mutex<Vec<String>>, CancelToken);
+    impl Progress for Stages {
+        fn update(&self, done: u64, total: u64) {
+            assert!(done <= total && total == 1000);
+        }
+        fn stage(&self, name: &str) {
+            self.0.lock().unwrap().push(name.to_string());
+            if name == "octree" {
+                self.1.cancel();
+            }
+        }
+    }
+    let shape = compile(&Library::new(), "sphere(p, 1.0)").unwrap();
+    let token = CancelToken::new();
+    let stages = Stages(Default::default(), token.clone());
+    let settings = MeshSettings {
+        resolution: 64,
+        ..MeshSettings::default()
+    };
+    let err = mesh_shape_with(shape.tape(), &settings, &Control::job(&stages, &token)).unwrap_err();
+    assert_eq!(err, MeshError::Cancelled);
+    let seen = stages.0.lock().unwrap().clone();
+    assert_eq!(seen.first().map(String::as_str), Some("bounds"), "{seen:?}");
+    // Without cancellation the same control lets it finish.
+    let token = CancelToken::new();
+    let quiet = isoray_job::NoProgress;
+    assert!(mesh_shape_with(shape.tape(), &settings, &Control::job(&quiet, &token)).is_ok());
+}
