@@ -481,7 +481,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
             return src.error(Origin::Implicit, d.message.clone(), None, &d.notes);
         };
         let at = |i: usize| map.get(i).copied().unwrap_or_else(|| map.last().copied().unwrap_or(0));
-        match loc.origin {
+        let e = match loc.origin {
             Origin::File(_) => {
                 let span = Span::new(at(d.span.start), at(d.span.end.max(d.span.start)));
                 src.error_at(span, &d.message, d.label.as_deref(), &d.notes)
@@ -491,6 +491,19 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                 notes.insert(0, format!("at byte {} of the value", d.span.start));
                 src.error(o, d.message.clone(), d.label.as_deref(), &notes)
             }
+        };
+        // The key of the value the shape text is in, for editors.
+        let key = match loc.origin {
+            Origin::Override(i) => src
+                .overrides
+                .get(i)
+                .and_then(|o| o.split_once('='))
+                .map(|(k, _)| k.trim().to_string()),
+            o => key_at(root, o),
+        };
+        match key {
+            Some(k) => e.with_key(k),
+            None => e,
         }
     };
 
@@ -1249,6 +1262,45 @@ fn resolve_exprs<'a>(
         });
     }
     Ok(out)
+}
+
+/// The dotted key of the value written at `origin` (`object.2.shape`,
+/// `surface.s.parametric.x`, `object.0.position.1`).
+fn key_at(entries: &[Entry], origin: Origin) -> Option<String> {
+    fn walk(item: &Located, origin: Origin, path: &mut Vec<String>) -> bool {
+        if item.origin == origin && !matches!(item.item, Item::Table(_)) {
+            return true;
+        }
+        match &item.item {
+            Item::Table(es) => {
+                for e in es {
+                    path.push(e.key.clone());
+                    if walk(&e.value, origin, path) {
+                        return true;
+                    }
+                    path.pop();
+                }
+                false
+            }
+            Item::Array(items) => {
+                for (i, it) in items.iter().enumerate() {
+                    path.push(i.to_string());
+                    if walk(it, origin, path) {
+                        return true;
+                    }
+                    path.pop();
+                }
+                false
+            }
+            _ => false,
+        }
+    }
+    let root = Located {
+        item: Item::Table(entries.to_vec()),
+        origin: Origin::Implicit,
+    };
+    let mut path = Vec::new();
+    walk(&root, origin, &mut path).then(|| path.join("."))
 }
 
 /// The distance of empty space (no object), far beyond any ray.

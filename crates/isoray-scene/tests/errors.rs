@@ -299,3 +299,19 @@ fn errors_are_structured_for_editors() {
     assert_eq!(e.key.as_deref(), Some("light.0.kind"));
     assert_eq!(e.file, "--set");
 }
+
+#[test]
+fn shape_text_errors_name_their_key() {
+    let key = |text: &str, overrides: &[&str]| {
+        let ov: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        load_str(text, "k.toml", &ov).unwrap_err().key
+    };
+    let two = "[[object]]\nshape = \"sphere(p, 1.0)\"\n[[object]]\nshape = \"sphere(p, q)\"\n";
+    assert_eq!(key(two, &[]).as_deref(), Some("object.1.shape"));
+    let placed = "[[object]]\nshape = \"sphere(p, 1.0)\"\nposition = [0.0, \"w\", 0.0]\n";
+    assert_eq!(key(placed, &[]).as_deref(), Some("object.0.position.1"));
+    let surf = "[surface.s]\nsdf = \"length(p) - r\"\n[[object]]\nshape = \"s(p)\"\n";
+    assert_eq!(key(surf, &[]).as_deref(), Some("surface.s.sdf"));
+    let ok = "[[object]]\nshape = \"sphere(p, 1.0)\"\n";
+    assert_eq!(key(ok, &["object.0.shape=box(p)"]).as_deref(), Some("object.0.shape"));
+}
