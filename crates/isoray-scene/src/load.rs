@@ -336,7 +336,7 @@ impl<'a> Reader<'a> {
         Err(self.err(v, key, "an array of 3 numbers, like [1.0, 0.5, 0.0]"))
     }
 
-    fn vec3(&mut self, key: &str, default: Vec3) -> Result<Vec3> {
+    pub(crate) fn vec3(&mut self, key: &str, default: Vec3) -> Result<Vec3> {
         Ok(self.vec3_opt(key)?.unwrap_or(default))
     }
 
@@ -557,29 +557,20 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     let camera = match camera_table.as_ref() {
         Some(v) => {
             let mut r = Reader::new(src, v, "camera")?;
-            let position = r.vec3("position", [0.0, 0.0, 5.0])?;
-            let target = r.vec3("target", [0.0, 0.0, 0.0])?;
-            let up = r.vec3("up", [0.0, 1.0, 0.0])?;
-            let fov = r.num_in(
-                "fov",
-                40.0,
-                |x| x > 0.0 && x < 180.0,
-                "a vertical field of view in degrees, between 0 and 180",
-            )?;
+            let camera = Camera::read(&mut r)?;
             let check_origin = r
                 .get("target")
                 .or(r.get("position"))
                 .map(|l| l.origin)
                 .unwrap_or(v.origin);
-            let projection = r.choice(
-                "projection",
-                &[
-                    ("perspective", Projection::Perspective),
-                    ("equirect", Projection::Equirect),
-                ],
-                Projection::Perspective,
-            )?;
-            r.finish(&["position", "target", "up", "fov", "projection"])?;
+            r.finish(&crate::schema::names(&camera_keys()))?;
+            let Camera {
+                position,
+                target,
+                up,
+                projection,
+                ..
+            } = camera;
             let fwd = sub(target, position);
             let perspective = projection == Projection::Perspective;
             if perspective && norm(fwd) < 1e-12 {
@@ -598,21 +589,9 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                     &[],
                 ));
             }
-            Camera {
-                position,
-                target,
-                up,
-                fov,
-                projection,
-            }
+            camera
         }
-        None => Camera {
-            position: [0.0, 0.0, 5.0],
-            target: [0.0; 3],
-            up: [0.0, 1.0, 0.0],
-            fov: 40.0,
-            projection: Projection::Perspective,
-        },
+        None => Camera::default(),
     };
 
     // [environment]

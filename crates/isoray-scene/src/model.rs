@@ -6,25 +6,44 @@ use isoray_shape::{Library, Shape, Value};
 /// A colour or vector of three components.
 pub type Vec3 = [f64; 3];
 
-/// The pinhole camera.
-///
-/// Pixel (i, j), i to the right and j downwards, has its centre at
-/// ndc = ((i+0.5)/W*2-1, 1-(j+0.5)/H*2); its ray leaves `position` in the
-/// direction normalize(forward + ndc.x·tan(fov/2)·aspect·right + ndc.y·tan(fov/2)·up),
-/// with aspect = W/H, forward = normalize(target − position),
-/// right = normalize(forward × up), and up re-orthogonalised as right × forward.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Camera {
-    /// Eye position.
-    pub position: Vec3,
-    /// Point looked at.
-    pub target: Vec3,
-    /// Approximate up direction (default +y).
-    pub up: Vec3,
-    /// Vertical field of view in degrees (default 40).
-    pub fov: f64,
-    /// How directions map to pixels (default perspective).
-    pub projection: Projection,
+use crate::schema::vector;
+
+impl Named for Projection {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("perspective", Projection::Perspective),
+        ("equirect", Projection::Equirect),
+    ];
+}
+
+const FOV: Range = range(
+    0.0,
+    false,
+    180.0,
+    false,
+    "0 < fov < 180",
+    "a vertical field of view in degrees, between 0 and 180",
+);
+
+settings! {
+    /// The pinhole camera.
+    ///
+    /// Pixel (i, j), i to the right and j downwards, has its centre at
+    /// ndc = ((i+0.5)/W*2-1, 1-(j+0.5)/H*2); its ray leaves `position` in the
+    /// direction normalize(forward + ndc.x·tan(fov/2)·aspect·right + ndc.y·tan(fov/2)·up),
+    /// with aspect = W/H, forward = normalize(target − position),
+    /// right = normalize(forward × up), and up re-orthogonalised as right × forward.
+    pub struct Camera, keys camera_keys {
+        /// Eye position.
+        position: Vec3 = [0.0, 0.0, 5.0], vector(), "the eye";
+        /// Point looked at.
+        target: Vec3 = [0.0, 0.0, 0.0], vector(), "the point looked at; must differ from `position`";
+        /// Approximate up direction.
+        up: Vec3 = [0.0, 1.0, 0.0], vector(), "approximate up direction; must not be parallel to `target − position` (or zero)";
+        /// Vertical field of view in degrees.
+        fov: f64 = 40.0, num(FOV), "vertical field of view in degrees";
+        /// How directions map to pixels.
+        projection: Projection = Projection::Perspective, choice::<Projection>(), "how directions map to pixels; `\"equirect\"`: every direction around `position` as an equirectangular map in world axes (see `[environment]`; `target`, `up` and `fov` are not used; make the image twice as wide as high)";
+    }
 }
 
 impl Camera {

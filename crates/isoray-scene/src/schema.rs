@@ -25,6 +25,8 @@ pub enum Kind {
     Choice(Vec<&'static str>),
     /// A colour: three numbers ≥ 0 (linear RGB).
     Colour,
+    /// A point or direction: three finite numbers.
+    Vector,
 }
 
 /// A range of finite numbers.
@@ -94,6 +96,7 @@ impl KeySpec {
             Kind::Bool => "boolean",
             Kind::Choice(_) => "string",
             Kind::Colour => "colour",
+            Kind::Vector => "vector",
         }
     }
 
@@ -109,6 +112,7 @@ impl KeySpec {
                 .collect::<Vec<_>>()
                 .join(", "),
             Kind::Colour => "components ≥ 0".to_string(),
+            Kind::Vector => String::new(),
         }
     }
 
@@ -238,6 +242,10 @@ pub fn choice<T: Named>() -> Kind {
 pub fn colour() -> Kind {
     Kind::Colour
 }
+/// A point or direction.
+pub fn vector() -> Kind {
+    Kind::Vector
+}
 
 /// A default as the file would write it.
 pub trait DocValue {
@@ -303,7 +311,10 @@ impl FromKey for bool {
 
 impl FromKey for [f64; 3] {
     fn from_key(r: &mut crate::load::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
-        r.color(spec.name, default)
+        match spec.kind {
+            Kind::Vector => r.vec3(spec.name, default),
+            _ => r.color(spec.name, default),
+        }
     }
 }
 

@@ -145,12 +145,17 @@ fn table_after(md: &str, heading: &str) -> Vec<String> {
 #[test]
 fn key_tables_are_the_schema() {
     let md = scene_md();
-    let want: Vec<String> = isoray_scene::render_keys().iter().map(|k| k.doc_row()).collect();
-    let have = table_after(&md, "### `[render]`");
-    if have != want {
-        panic!(
-            "the [render] table of SCENE.md differs from the key schema (crates/isoray-scene/src/model.rs); it should read:\n{}",
-            want.join("\n")
-        );
+    for (table, keys) in [
+        ("render", isoray_scene::render_keys()),
+        ("camera", isoray_scene::camera_keys()),
+    ] {
+        let want: Vec<String> = keys.iter().map(|k| k.doc_row()).collect();
+        let have = table_after(&md, &format!("### `[{table}]`"));
+        if have != want {
+            panic!(
+                "the [{table}] table of SCENE.md differs from the key schema (crates/isoray-scene/src/model.rs); it should read:\n{}",
+                want.join("\n")
+            );
+        }
     }
 }
