@@ -561,7 +561,10 @@ fn ctrl_c_stops_a_render_with_130_and_writes_nothing() {
         .unwrap();
     std::thread::sleep(std::time::Duration::from_millis(400));
     let sent = std::time::Instant::now();
-    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status();
+    // The shell's built-in `kill` (no procps needed).
+    let kill = Command::new("sh")
+        .args(["-c", &format!("kill -INT {}", child.id())])
+        .status();
     assert!(kill.is_ok_and(|s| s.success()), "kill -INT");
     let status = child.wait().unwrap();
     let waited = sent.elapsed();
