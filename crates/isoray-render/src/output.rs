@@ -3,7 +3,7 @@
 //! the target, which is renamed over it only when complete, so a failed
 //! write leaves any old file intact.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use exr::prelude::*;
 use isoray_shade::srgb::to_srgb8;
@@ -21,14 +21,7 @@ pub enum OutputError {
     },
 }
 
-fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
-}
-
+/// Writes through [`isoray_scene::replace_atomically`], naming the target in errors.
 fn atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> std::result::Result<(), String>,
@@ -40,15 +33,8 @@ fn atomically(
     if path.is_dir() {
         return Err(fail("it is a directory".into()));
     }
-    let tmp = temp_path(path);
-    if let Err(e) = write(&tmp) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(fail(e));
-    }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        fail(e.to_string())
-    })
+    isoray_scene::replace_atomically(path, |tmp| write(tmp).map_err(std::io::Error::other))
+        .map_err(|e| fail(e.to_string()))
 }
 
 /// Writes `text` to `path` atomically: a failed write leaves an existing file intact.

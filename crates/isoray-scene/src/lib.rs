@@ -34,4 +34,4 @@ pub mod schema;
 pub use error::{SceneError, Sources};
 pub use load::{load, load_str, load_str_with, load_with, LoadOptions};
 pub use model::*;
-pub use save::{edit_text, set_file, write_atomic, SetReport};
+pub use save::{edit_text, replace_atomically, set_file, write_atomic, SetReport};

@@ -739,8 +739,8 @@ impl Scene {
             ["camera", "target"] => SetValue::CameraTarget(three()?),
             ["camera", "fov"] => {
                 let f = one()?;
-                if !(f > 0.0 && f < 180.0) {
-                    return Err(err("a vertical field of view in degrees, between 0 and 180"));
+                if !FOV.contains(f) {
+                    return Err(err(FOV.expected));
                 }
                 SetValue::CameraFov(f)
             }
