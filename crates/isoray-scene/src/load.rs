@@ -14,6 +14,7 @@ use crate::doc::{convert, from_toml, Entry, Item, Located, Origin};
 use crate::env::{EnvMap, Environment, RgbImage};
 use crate::error::{SceneError, Sources};
 use crate::model::*;
+use crate::schema::{spec, KeySpec, Kind};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -284,14 +285,6 @@ impl<'a> Reader<'a> {
         }
     }
 
-    fn positive(&mut self, key: &str, default: f64) -> Result<f64> {
-        self.num_in(key, default, |x| x.is_finite() && x > 0.0, "a positive number")
-    }
-
-    fn non_negative(&mut self, key: &str, default: f64) -> Result<f64> {
-        self.num_in(key, default, |x| x.is_finite() && x >= 0.0, "a number ≥ 0")
-    }
-
     pub(crate) fn int(&mut self, key: &str, default: u32, lo: u32, hi: u32) -> Result<u32> {
         let Some(v) = self.get(key) else {
             return Ok(default);
@@ -341,7 +334,7 @@ impl<'a> Reader<'a> {
     }
 
     /// A number or colour with every component in [0, 1] (a number is grey).
-    fn unit_color(&mut self, key: &str, default: Vec3) -> Result<Vec3> {
+    pub(crate) fn unit_color(&mut self, key: &str, default: Vec3) -> Result<Vec3> {
         let Some(v) = self.get(key) else {
             return Ok(default);
         };
@@ -408,7 +401,40 @@ impl<'a> Reader<'a> {
             .with_key(format!("{}.{key}", self.ctx)))
     }
 
+    /// A number key read by its description (default and range).
+    pub(crate) fn num_key(&mut self, spec: &KeySpec) -> Result<f64> {
+        let Kind::Num(range) = spec.kind else {
+            unreachable!("`{}` is a number key", spec.name)
+        };
+        self.num_in(spec.name, spec.default_f64(), |x| range.contains(x), range.expected)
+    }
+
+    /// A boolean key read by its description.
+    pub(crate) fn bool_key(&mut self, spec: &KeySpec) -> Result<bool> {
+        self.boolean(spec.name, spec.default == "true")
+    }
+
+    /// A choice key read by its description: the name chosen.
+    pub(crate) fn choice_key(&mut self, spec: &KeySpec) -> Result<&'static str> {
+        let Kind::Choice(names) = &spec.kind else {
+            unreachable!("`{}` is a choice key", spec.name)
+        };
+        let options: Vec<(&str, &'static str)> = names.iter().map(|n| (*n, *n)).collect();
+        let default = names
+            .iter()
+            .copied()
+            .find(|n| spec.default.trim_matches('"') == *n)
+            .unwrap_or(names[0]);
+        self.choice(spec.name, &options, default)
+    }
+
     /// Errors on keys that were never read.
+    /// Errors on keys of a described table that were never read.
+    fn finish_keys(self, keys: &[KeySpec]) -> Result<()> {
+        self.finish(&crate::schema::names(keys))
+    }
+
+    /// Errors on keys that were never read (`known`: the table's keys).
     fn finish(self, known: &[&str]) -> Result<()> {
         for (e, used) in self.entries.iter().zip(&self.used) {
             if !used && known.contains(&e.key.as_str()) {
@@ -549,7 +575,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     let mut driven: Vec<Driven> = Vec::new();
     let camera_table = match top.get("camera") {
         Some(v) => Some(
-            resolve_exprs(src, &lib, v, "camera", CAMERA_EXPR, &mut snippets, &mut driven)
+            resolve_exprs(src, &lib, v, "camera", &camera_keys(), &mut snippets, &mut driven)
                 .map_err(|e| e.into_scene(&snippets, &shape_error))?,
         ),
         None => None,
@@ -563,31 +589,19 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                 .or(r.get("position"))
                 .map(|l| l.origin)
                 .unwrap_or(v.origin);
-            r.finish(&crate::schema::names(&camera_keys()))?;
-            let Camera {
-                position,
-                target,
-                up,
-                projection,
-                ..
-            } = camera;
-            let fwd = sub(target, position);
-            let perspective = projection == Projection::Perspective;
-            if perspective && norm(fwd) < 1e-12 {
-                return Err(src.error(
-                    check_origin,
-                    "camera `target` equals `position`: the camera has no direction",
-                    Some("move the target away from the position"),
-                    &[],
-                ));
-            }
-            if perspective && norm(cross(fwd, up)) < 1e-9 * norm(fwd) * norm(up).max(1e-300) {
-                return Err(src.error(
-                    check_origin,
-                    "camera `up` is parallel to the viewing direction (or zero)",
-                    Some("choose an `up` that is not along target − position"),
-                    &[],
-                ));
+            r.finish_keys(&camera_keys())?;
+            if let Err(problem) = camera.check() {
+                let (message, label) = match problem {
+                    CameraProblem::NoDirection => (
+                        "camera `target` equals `position`: the camera has no direction",
+                        "move the target away from the position",
+                    ),
+                    CameraProblem::UpAlongView => (
+                        "camera `up` is parallel to the viewing direction (or zero)",
+                        "choose an `up` that is not along target − position",
+                    ),
+                };
+                return Err(src.error(check_origin, message, Some(label), &[]));
             }
             camera
         }
@@ -605,7 +619,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         Some(v) => {
             let mut r = Reader::new(src, v, "render")?;
             let s = RenderSettings::read(&mut r)?;
-            r.finish(&crate::schema::names(&render_keys()))?;
+            r.finish_keys(&render_keys())?;
             s
         }
         None => RenderSettings::default(),
@@ -631,15 +645,12 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         };
         for (i, lv) in items.into_iter().enumerate() {
             let ctx = format!("light.{i}");
-            let resolved = resolve_exprs(src, &lib, lv, &ctx, LIGHT_EXPR, &mut snippets, &mut driven)
+            let resolved = resolve_exprs(src, &lib, lv, &ctx, &light_keys(), &mut snippets, &mut driven)
                 .map_err(|e| e.into_scene(&snippets, &shape_error))?;
             let lv = &resolved;
             let mut r = Reader::new(src, lv, &ctx)?;
-            let kind_name = r.choice(
-                "kind",
-                &[("directional", 0), ("point", 1), ("sphere", 2), ("rect", 3)],
-                0,
-            )?;
+            let keys = light_keys();
+            let kind_name = r.choice_key(spec(&keys, "kind"))?;
             let need = |r: &mut Reader, key: &str, what: &str| -> Result<Vec3> {
                 r.vec3_opt(key)?.ok_or_else(|| {
                     src.error(
@@ -651,8 +662,8 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                 })
             };
             let kind = match kind_name {
-                0 => {
-                    let dir = r.vec3("direction", [-1.0, 2.0, 1.0])?;
+                "directional" => {
+                    let dir = r.vec3("direction", spec(&keys, "direction").default_vec3())?;
                     if norm(dir) < 1e-12 {
                         let o = r.get("direction").map(|l| l.origin).unwrap_or(lv.origin);
                         return Err(src.error(
@@ -666,12 +677,12 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                         direction: normalize(dir),
                     }
                 }
-                1 => LightKind::Point {
+                "point" => LightKind::Point {
                     position: need(&mut r, "position", "point")?,
                 },
-                2 => {
+                "sphere" => {
                     let position = need(&mut r, "position", "sphere")?;
-                    let radius = r.positive("radius", 0.5)?;
+                    let radius = r.num_key(spec(&keys, "radius"))?;
                     LightKind::Sphere { position, radius }
                 }
                 _ => {
@@ -692,25 +703,9 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
             };
             let light = Light {
                 kind,
-                color: r.color("color", [1.0; 3])?,
-                intensity: r.non_negative("intensity", 1.0)?,
-                size: r.positive("size", 0.1)?,
-                attenuation: r.color("attenuation", [1.0, 0.0, 0.0])?,
-                samples: r.int("samples", 16, 1, 4096)?,
+                ..Light::read(&mut r)?
             };
-            r.finish(&[
-                "kind",
-                "direction",
-                "position",
-                "color",
-                "intensity",
-                "size",
-                "attenuation",
-                "samples",
-                "radius",
-                "u",
-                "v",
-            ])?;
+            r.finish_keys(&keys)?;
             lights.push(light);
         }
     }
@@ -729,48 +724,16 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         };
         for e in entries {
             let ctx = format!("material.{}", e.key);
-            let resolved = resolve_exprs(src, &lib, &e.value, &ctx, MATERIAL_EXPR, &mut snippets, &mut driven)
+            let resolved = resolve_exprs(src, &lib, &e.value, &ctx, &material_keys(), &mut snippets, &mut driven)
                 .map_err(|e| e.into_scene(&snippets, &shape_error))?;
             let mut r = Reader::new(src, &resolved, &ctx)?;
-            let d = Material::default_named(&e.key);
+            let keys = material_keys();
             let m = Material {
                 name: e.key.clone(),
-                ambient: r.color("ambient", d.ambient)?,
-                diffuse: r.color("diffuse", d.diffuse)?,
-                specular: r.color("specular", d.specular)?,
-                shininess: r.positive("shininess", d.shininess)?,
-                emission: r.color("emission", d.emission)?,
-                model: r.choice(
-                    "model",
-                    &[
-                        ("phong", ShadingModel::Phong),
-                        ("blinn-phong", ShadingModel::BlinnPhong),
-                    ],
-                    d.model,
-                )?,
-                specular_function: r.choice(
-                    "specular_function",
-                    &[("pow", SpecularFunction::Pow), ("schlick", SpecularFunction::Schlick)],
-                    d.specular_function,
-                )?,
-                reflectivity: r.unit_color("reflectivity", d.reflectivity)?,
-                transparency: r.num_in(
-                    "transparency",
-                    d.transparency,
-                    |x| (0.0..=1.0).contains(&x),
-                    "a number from 0 to 1",
-                )?,
-                ior: r.num_in(
-                    "ior",
-                    d.ior,
-                    |x| x.is_finite() && (1.0..=10.0).contains(&x),
-                    "an index of refraction from 1 to 10",
-                )?,
-                absorption: r.color("absorption", d.absorption)?,
-                fresnel: fresnel_setting(&mut r, d.fresnel)?,
-                checker: None,
+                fresnel: fresnel_setting(&mut r, &keys)?,
+                ..Material::read(&mut r)?
             };
-            let checker_size = r.positive("checker_size", 1.0)?;
+            let checker_size = r.num_key(spec(&keys, "checker_size"))?;
             if let Some((other, loc)) = r.string("checker")? {
                 pending_checkers.push((e.key.clone(), other.to_string(), loc.clone(), checker_size));
             } else if let Some(v) = r.get("checker_size") {
@@ -781,7 +744,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                     &["add checker = \"OTHER_MATERIAL\"".into()],
                 ));
             }
-            r.finish(MATERIAL_KEYS)?;
+            r.finish_keys(&keys)?;
             if let Some(slot) = materials.iter_mut().find(|x| x.name == m.name) {
                 *slot = m;
             } else {
@@ -837,7 +800,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                     ));
                 }
             }
-            let options = surface_options(&mut r, &ctx)?;
+            let options = surface_options(&mut r)?;
             if let Some((m, loc)) = r.string("material")? {
                 let k = material_index(src, &materials, m, loc, &format!("{ctx}.material"))?;
                 surface_materials.push((e.key.clone(), k));
@@ -860,7 +823,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
             if let Some(pv) = parametric {
                 let coords = parametric_coords(src, pv, &ctx)?;
                 let domain = parametric_domain(&mut r, &ctx)?;
-                r.finish(SURFACE_KEYS)?;
+                r.finish_keys(&surface_keys())?;
                 let mut texts = Vec::new();
                 for (text, loc) in coords {
                     let Item::Str(_, map) = &loc.item else { unreachable!() };
@@ -894,7 +857,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                     ))
                 }
             };
-            r.finish(SURFACE_KEYS)?;
+            r.finish_keys(&surface_keys())?;
             let Item::Str(_, map) = &loc.item else { unreachable!() };
             let id = snippets.len();
             snippets.push((loc, map));
@@ -968,7 +931,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                 for key in TRANSFORM_KEYS {
                     placement.push((key, r.get(key)));
                 }
-                r.finish(OBJECT_KEYS)?;
+                r.finish_keys(&object_keys())?;
                 let transform = if placement.iter().any(|(_, v)| v.is_some()) {
                     let mut values: Vec<Shape> = Vec::with_capacity(7);
                     for (key, v) in &placement {
@@ -1142,34 +1105,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     })
 }
 
-/// Camera keys whose numbers may be shape text of `t` and the parameters.
-const CAMERA_EXPR: &[&str] = &["position", "target", "fov"];
-/// Light keys whose numbers may be shape text.
-const LIGHT_EXPR: &[&str] = &[
-    "direction",
-    "position",
-    "color",
-    "intensity",
-    "size",
-    "radius",
-    "u",
-    "v",
-    "attenuation",
-];
-/// Material keys whose numbers may be shape text.
-const MATERIAL_EXPR: &[&str] = &[
-    "ambient",
-    "diffuse",
-    "specular",
-    "shininess",
-    "emission",
-    "reflectivity",
-    "transparency",
-    "ior",
-    "absorption",
-];
-
-/// A copy of the table `v` in which every value of `keys` written as shape
+/// A copy of the table `v` in which every numeric key of `keys` written as shape
 /// text (or an array with shape text in it) is replaced by its value now,
 /// at the value's origin, so the table reads and checks like numbers; each
 /// such value is recorded in `driven` to be computed again when the time or
@@ -1179,7 +1115,7 @@ fn resolve_exprs<'a>(
     lib: &Library,
     v: &'a Located,
     ctx: &str,
-    keys: &[&str],
+    keys: &[KeySpec],
     snippets: &mut Vec<(&'a Located, &'a [usize])>,
     driven: &mut Vec<Driven>,
 ) -> std::result::Result<Located, ValueError> {
@@ -1192,7 +1128,7 @@ fn resolve_exprs<'a>(
         unreachable!()
     };
     for (e, o) in entries.iter().zip(out_entries.iter_mut()) {
-        if !keys.contains(&e.key.as_str()) {
+        if !keys.iter().any(|k| k.name == e.key && k.is_numeric()) {
             continue;
         }
         let has_text = match &e.value.item {
@@ -1284,9 +1220,6 @@ fn key_at(entries: &[Entry], origin: Origin) -> Option<String> {
 
 /// The distance of empty space (no object), far beyond any ray.
 const EMPTY: f64 = 1e9;
-
-/// The keys of an `[[object]]`.
-const OBJECT_KEYS: &[&str] = &["name", "material", "shape", "position", "rotation", "scale"];
 
 /// The placement keys of an `[[object]]`, in input order.
 const TRANSFORM_KEYS: [&str; 3] = ["position", "rotation", "scale"];
@@ -1448,9 +1381,10 @@ fn environment(src: &Sources, v: &Located, scene_name: &str) -> Result<Environme
             nadir: f(g.color("nadir", [0.3, 0.3, 0.32])?),
         };
         g.finish(&["zenith", "horizon", "nadir"])?;
-        let rotation = r.num_in("rotation", 0.0, f64::is_finite, "an angle in degrees")?;
-        let intensity = r.non_negative("intensity", 1.0)?;
-        r.finish(&["image", "cube", "gradient", "rotation", "intensity"])?;
+        let keys = environment_keys();
+        let rotation = r.num_key(spec(&keys, "rotation"))?;
+        let intensity = r.num_key(spec(&keys, "intensity"))?;
+        r.finish_keys(&environment_keys())?;
         return Ok(Environment {
             map,
             rotation,
@@ -1506,9 +1440,10 @@ fn environment(src: &Sources, v: &Located, scene_name: &str) -> Result<Environme
             ))
         }
     };
-    let rotation = r.num_in("rotation", 0.0, f64::is_finite, "an angle in degrees")?;
-    let intensity = r.non_negative("intensity", 1.0)?;
-    r.finish(&["image", "cube", "gradient", "rotation", "intensity"])?;
+    let keys = environment_keys();
+    let rotation = r.num_key(spec(&keys, "rotation"))?;
+    let intensity = r.num_key(spec(&keys, "intensity"))?;
+    r.finish_keys(&environment_keys())?;
     Ok(Environment {
         map,
         rotation,
@@ -1516,48 +1451,15 @@ fn environment(src: &Sources, v: &Located, scene_name: &str) -> Result<Environme
     })
 }
 
-/// All keys of a `[material.NAME]` table.
-pub const MATERIAL_KEYS: &[&str] = &[
-    "ambient",
-    "diffuse",
-    "specular",
-    "shininess",
-    "emission",
-    "model",
-    "specular_function",
-    "reflectivity",
-    "transparency",
-    "ior",
-    "absorption",
-    "fresnel",
-    "fresnel_model",
-    "checker",
-    "checker_size",
-];
-
 /// `fresnel = true | false` and `fresnel_model = "schlick" | "exact"`.
-fn fresnel_setting(r: &mut Reader, default: Fresnel) -> Result<Fresnel> {
-    let on = r.boolean("fresnel", default != Fresnel::Off)?;
-    let model = r.choice(
-        "fresnel_model",
-        &[("schlick", Fresnel::Schlick), ("exact", Fresnel::Exact)],
-        Fresnel::Schlick,
-    )?;
+fn fresnel_setting(r: &mut Reader, keys: &[KeySpec]) -> Result<Fresnel> {
+    let on = r.bool_key(spec(keys, "fresnel"))?;
+    let model = match r.choice_key(spec(keys, "fresnel_model"))? {
+        "exact" => Fresnel::Exact,
+        _ => Fresnel::Schlick,
+    };
     Ok(if on { model } else { Fresnel::Off })
 }
-
-/// All keys of a `[surface.NAME]` table.
-pub const SURFACE_KEYS: &[&str] = &[
-    "params",
-    "sdf",
-    "implicit",
-    "parametric",
-    "domain",
-    "image_only",
-    "bound",
-    "lipschitz_factor",
-    "material",
-];
 
 /// The index of a named material, or an error at `loc` naming the defined ones.
 fn material_index(src: &Sources, materials: &[Material], m: &str, loc: &Located, ctx: &str) -> Result<usize> {
@@ -1578,24 +1480,15 @@ fn material_index(src: &Sources, materials: &[Material], m: &str, loc: &Located,
 }
 
 /// `bound`, `lipschitz_factor` and `image_only` of a surface.
-fn surface_options(r: &mut Reader, ctx: &str) -> Result<SurfaceOptions> {
-    let bound = r.choice(
-        "bound",
-        &[
-            ("auto", BoundMethod::Auto),
-            ("taylor", BoundMethod::Taylor),
-            ("lipschitz", BoundMethod::Lipschitz),
-            ("first-order", BoundMethod::FirstOrder),
-        ],
-        BoundMethod::Auto,
-    )?;
-    let lipschitz_factor = r.num_in(
-        "lipschitz_factor",
-        1.0,
-        |x| x.is_finite() && x >= 1.0,
-        "a number ≥ 1 (the traced distance is divided by it)",
-    )?;
-    let _ = ctx;
+fn surface_options(r: &mut Reader) -> Result<SurfaceOptions> {
+    let keys = surface_keys();
+    let bound = match r.choice_key(spec(&keys, "bound"))? {
+        "taylor" => BoundMethod::Taylor,
+        "lipschitz" => BoundMethod::Lipschitz,
+        "first-order" => BoundMethod::FirstOrder,
+        _ => BoundMethod::Auto,
+    };
+    let lipschitz_factor = r.num_key(spec(&keys, "lipschitz_factor"))?;
     Ok(SurfaceOptions {
         bound,
         lipschitz_factor,
@@ -1780,20 +1673,4 @@ fn param_value(src: &Sources, v: &Located, ctx: &str) -> Result<Value> {
     }
 }
 
-fn sub(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn norm(a: Vec3) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
-fn normalize(a: Vec3) -> Vec3 {
-    let n = norm(a);
-    [a[0] / n, a[1] / n, a[2] / n]
-}
+use crate::model::{cross3 as cross, norm3 as norm, unit as normalize};

@@ -47,6 +47,26 @@ settings! {
 }
 
 impl Camera {
+    /// Checks what the key descriptions cannot: a perspective camera needs
+    /// a direction (`target` ≠ `position`) and an `up` that is not along it.
+    pub fn check(&self) -> Result<(), CameraProblem> {
+        if self.projection != Projection::Perspective {
+            return Ok(());
+        }
+        let fwd = [
+            self.target[0] - self.position[0],
+            self.target[1] - self.position[1],
+            self.target[2] - self.position[2],
+        ];
+        if norm3(fwd) < 1e-12 {
+            return Err(CameraProblem::NoDirection);
+        }
+        if norm3(cross3(fwd, self.up)) < 1e-9 * norm3(fwd) * norm3(self.up).max(1e-300) {
+            return Err(CameraProblem::UpAlongView);
+        }
+        Ok(())
+    }
+
     /// The camera's orthonormal frame, the one convention the ray tracer and
     /// the polygon pipeline share: (forward, right, up) with
     /// forward = normalize(target − position), right = normalize(forward × up)
@@ -128,7 +148,10 @@ pub enum View {
     Normals,
 }
 
-use crate::schema::{boolean, choice, colour, int, num, range, settings, Named, Range};
+use crate::schema::{
+    boolean, choice, colour, int, key, key_without_default, num, range, settings, unit_colour, DocValue, KeySpec, Kind,
+    Named, Range,
+};
 
 impl Named for NormalMethod {
     const NAMES: &'static [(&'static str, Self)] = &[
@@ -253,21 +276,94 @@ pub enum LightKind {
     },
 }
 
-/// A light (`[[light]]`).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Light {
-    /// Directional or point.
-    pub kind: LightKind,
-    /// Linear RGB colour (default white).
-    pub color: Vec3,
-    /// Multiplies the colour (default 1).
-    pub intensity: f64,
-    /// Soft-shadow penumbra size: k = 1/size (default 0.1).
-    pub size: f64,
-    /// Point and area lights: 1/(c + l·d + q·d²) with [c, l, q] (default [1, 0, 0]: none).
-    pub attenuation: Vec3,
-    /// Area lights: shadow rays per shading point (default 16).
-    pub samples: u32,
+settings! {
+    /// A light (`[[light]]`). Its kind and where it is are read from the
+    /// keys of [`light_keys`] that come before these.
+    pub struct Light, keys light_value_keys {
+        /// Area lights: shadow rays per shading point.
+        samples: u32 = 16, int(1, 4096), "area lights: points sampled on the light per shaded point, each with a hard shadow ray";
+        /// Linear RGB colour.
+        color: Vec3 = [1.0; 3], colour(), "linear RGB";
+        /// Multiplies the colour.
+        intensity: f64 = 1.0, num(Range::NON_NEGATIVE), "multiplies `color`";
+        /// Soft-shadow penumbra size: k = 1/size.
+        size: f64 = 0.1, num(Range::POSITIVE), "penumbra size of soft and improved shadows: k = 1/size";
+        /// Point and area lights: 1/(c + l·d + q·d²) with [c, l, q].
+        attenuation: Vec3 = [1.0, 0.0, 0.0], colour(), "point and area lights: `[c, l, q]`, the light is divided by `c + l·d + q·d²` at distance d; ignored by directional lights";
+    }
+    extra {
+        /// Directional, point or area.
+        kind: LightKind = LightKind::Directional {
+            direction: unit(DEFAULT_LIGHT_DIRECTION),
+        };
+    }
+}
+
+/// Why a camera cannot form an image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CameraProblem {
+    /// `target` equals `position`.
+    NoDirection,
+    /// `up` is parallel to the viewing direction, or zero.
+    UpAlongView,
+}
+
+impl CameraProblem {
+    /// What a camera value set from outside must be instead.
+    pub fn expected(self) -> &'static str {
+        match self {
+            CameraProblem::NoDirection => "a `target` that differs from `position` (the camera has no direction)",
+            CameraProblem::UpAlongView => "an `up` that is not parallel to the viewing direction (or zero)",
+        }
+    }
+}
+
+/// The default `direction` of a directional light (towards the light).
+pub const DEFAULT_LIGHT_DIRECTION: Vec3 = [-1.0, 2.0, 1.0];
+
+pub(crate) fn unit(v: Vec3) -> Vec3 {
+    let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    v.map(|x| x / l)
+}
+
+/// Every key of a `[[light]]` table: its kind and placement, then
+/// [`light_value_keys`].
+pub fn light_keys() -> Vec<KeySpec> {
+    let mut keys = vec![
+        key(
+            "kind",
+            Kind::Choice(vec!["directional", "point", "sphere", "rect"]),
+            "\"directional\"",
+            "`\"directional\"` (at infinity), `\"point\"`, `\"sphere\"` or `\"rect\"` (area lights)",
+        ),
+        key(
+            "direction",
+            vector(),
+            &DEFAULT_LIGHT_DIRECTION.doc_text(),
+            "directional lights only: direction **towards** the light, normalised on load; must not be zero",
+        ),
+        key_without_default(
+            "position",
+            vector(),
+            "required for point and area lights",
+            "where the light is (the centre of an area light)",
+        ),
+        key("radius", num(Range::POSITIVE), "0.5", "sphere lights: the radius"),
+        key_without_default(
+            "u",
+            vector(),
+            "required for rect lights",
+            "rect lights: one edge; the light is position + a·u + b·v for a, b in [−½, ½], emitting on both sides",
+        ),
+        key_without_default(
+            "v",
+            vector(),
+            "required for rect lights",
+            "rect lights: the other edge, not parallel to `u`",
+        ),
+    ];
+    keys.extend(light_value_keys());
+    keys
 }
 
 /// The specular model of a material.
@@ -288,38 +384,97 @@ pub enum SpecularFunction {
     Schlick,
 }
 
-/// A material (`[material.NAME]`).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Material {
-    /// Its name.
-    pub name: String,
-    /// Ambient reflectance (default 0.1 grey).
-    pub ambient: Vec3,
-    /// Diffuse reflectance (default 0.8 grey).
-    pub diffuse: Vec3,
-    /// Specular reflectance (default 0.5 grey).
-    pub specular: Vec3,
-    /// Specular exponent (default 32).
-    pub shininess: f64,
-    /// Emitted light, added unshadowed (default black).
-    pub emission: Vec3,
-    /// Phong or Blinn-Phong (default Blinn-Phong).
-    pub model: ShadingModel,
-    /// Pow or Schlick (default pow).
-    pub specular_function: SpecularFunction,
-    /// Mirror reflectance per channel, 0..1 (default 0: none).
-    pub reflectivity: Vec3,
-    /// Fraction of the light not reflected that is transmitted, 0..1 (default 0: opaque).
-    pub transparency: f64,
-    /// Index of refraction (default 1.5).
-    pub ior: f64,
-    /// Beer–Lambert absorption per unit distance inside, per channel (default 0).
-    pub absorption: Vec3,
-    /// Fresnel weighting of reflection against refraction (default: on, Schlick).
-    pub fresnel: Fresnel,
-    /// A 3D checker: (index of the other material, cell size). Where
-    /// ⌊x/s⌋ + ⌊y/s⌋ + ⌊z/s⌋ is odd, the other material is used.
-    pub checker: Option<(usize, f64)>,
+const UNIT: Range = range(0.0, true, 1.0, true, "0 ≤ x ≤ 1", "a number from 0 to 1");
+const IOR: Range = range(
+    1.0,
+    true,
+    10.0,
+    true,
+    "1 ≤ n ≤ 10",
+    "an index of refraction from 1 to 10",
+);
+
+impl Named for ShadingModel {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("blinn-phong", ShadingModel::BlinnPhong),
+        ("phong", ShadingModel::Phong),
+    ];
+}
+
+impl Named for SpecularFunction {
+    const NAMES: &'static [(&'static str, Self)] =
+        &[("pow", SpecularFunction::Pow), ("schlick", SpecularFunction::Schlick)];
+}
+
+settings! {
+    /// A material (`[material.NAME]`).
+    pub struct Material, keys material_value_keys {
+        /// Ambient reflectance.
+        ambient: Vec3 = [0.1; 3], colour(), "ambient reflectance (multiplied by AO)";
+        /// Diffuse reflectance.
+        diffuse: Vec3 = [0.8; 3], colour(), "diffuse (Lambert) reflectance";
+        /// Specular reflectance.
+        specular: Vec3 = [0.5; 3], colour(), "specular reflectance";
+        /// Specular exponent.
+        shininess: f64 = 32.0, num(Range::POSITIVE), "specular exponent n";
+        /// Emitted light, added unshadowed.
+        emission: Vec3 = [0.0; 3], colour(), "emitted light, added without shadowing or AO";
+        /// Phong or Blinn-Phong.
+        model: ShadingModel = ShadingModel::BlinnPhong, choice::<ShadingModel>(), "the specular model (section 9.3)";
+        /// Pow or Schlick.
+        specular_function: SpecularFunction = SpecularFunction::Pow, choice::<SpecularFunction>(), "`\"pow\"`: cⁿ; `\"schlick\"`: c / (n − n·c + c)";
+        /// Mirror reflectance per channel, 0..1.
+        reflectivity: Vec3 = [0.0; 3], unit_colour(), "mirror reflectance (a number is grey)";
+        /// Fraction of the light not reflected that is transmitted, 0..1.
+        transparency: f64 = 0.0, num(UNIT), "the fraction of the light not reflected that passes through (refracted)";
+        /// Index of refraction.
+        ior: f64 = 1.5, num(IOR), "index of refraction (air is 1)";
+        /// Beer–Lambert absorption per unit distance inside, per channel.
+        absorption: Vec3 = [0.0; 3], colour(), "Beer–Lambert absorption per unit distance travelled inside";
+    }
+    extra {
+        /// Its name.
+        name: String = String::new();
+        /// Fresnel weighting of reflection against refraction (keys
+        /// `fresnel` and `fresnel_model`).
+        fresnel: Fresnel = Fresnel::Schlick;
+        /// A 3D checker: (index of the other material, cell size). Where
+        /// ⌊x/s⌋ + ⌊y/s⌋ + ⌊z/s⌋ is odd, the other material is used.
+        checker: Option<(usize, f64)> = None;
+    }
+}
+
+/// Every key of a `[material.NAME]` table: [`material_value_keys`], then
+/// the Fresnel and checker keys.
+pub fn material_keys() -> Vec<KeySpec> {
+    let mut keys = material_value_keys();
+    keys.extend([
+        key(
+            "fresnel",
+            boolean(),
+            "true",
+            "weight reflection against refraction by the Fresnel reflectance",
+        ),
+        key(
+            "fresnel_model",
+            Kind::Choice(vec!["schlick", "exact"]),
+            "\"schlick\"",
+            "`\"schlick\"`: R₀ + (1 − R₀)(1 − cos θ)⁵; `\"exact\"`: the Fresnel equations, unpolarised",
+        ),
+        key_without_default(
+            "checker",
+            Kind::Str,
+            "none",
+            "a 3D checker: where ⌊x/s⌋ + ⌊y/s⌋ + ⌊z/s⌋ is odd, the surface takes the named material instead (its shading; reflection and refraction stay this material's)",
+        ),
+        key(
+            "checker_size",
+            num(Range::POSITIVE),
+            "1.0",
+            "the checker's cell size s (only with `checker`)",
+        ),
+    ]);
+    keys
 }
 
 /// How reflection and refraction are weighted at a surface.
@@ -343,21 +498,152 @@ impl Material {
     pub fn default_named(name: &str) -> Material {
         Material {
             name: name.to_string(),
-            ambient: [0.1; 3],
-            diffuse: [0.8; 3],
-            specular: [0.5; 3],
-            shininess: 32.0,
-            emission: [0.0; 3],
-            model: ShadingModel::BlinnPhong,
-            specular_function: SpecularFunction::Pow,
-            reflectivity: [0.0; 3],
-            transparency: 0.0,
-            ior: 1.5,
-            absorption: [0.0; 3],
-            fresnel: Fresnel::Schlick,
-            checker: None,
+            ..Material::default()
         }
     }
+}
+
+const ANGLE: Range = range(
+    f64::NEG_INFINITY,
+    false,
+    f64::INFINITY,
+    false,
+    "",
+    "an angle in degrees",
+);
+const LIPSCHITZ: Range = range(
+    1.0,
+    true,
+    f64::INFINITY,
+    false,
+    "≥ 1",
+    "a number ≥ 1 (the traced distance is divided by it)",
+);
+
+/// Every key of an `[[object]]` table.
+pub fn object_keys() -> Vec<KeySpec> {
+    vec![
+        key_without_default("shape", Kind::Str, "required", "shape text giving a `float` distance"),
+        key("material", Kind::Str, "\"default\"", "the name of a `[material.NAME]`"),
+        key_without_default("name", Kind::Str, "none", "a label, for your own reference"),
+        key(
+            "position",
+            vector(),
+            "[0.0, 0.0, 0.0]",
+            "where the object's origin is placed",
+        ),
+        key(
+            "rotation",
+            vector(),
+            "[0.0, 0.0, 0.0]",
+            "degrees: the object is turned about x, then y, then z, in world axes (right-handed, counter-clockwise seen from the positive axis)",
+        ),
+        key(
+            "scale",
+            num(Range::POSITIVE),
+            "1.0",
+            "uniform scale; distances stay exact: d(p) = s·d₀(p/s)",
+        ),
+    ]
+}
+
+/// Every key of a `[surface.NAME]` table.
+pub fn surface_keys() -> Vec<KeySpec> {
+    vec![
+        key_without_default(
+            "params",
+            Kind::Text("inline table"),
+            "none",
+            "parameter names with default values (number, 2 or 3 numbers, or `{ default = x, range = [min, max] }`); the default fixes each parameter's type",
+        ),
+        key_without_default(
+            "sdf",
+            Kind::Str,
+            "one of `sdf`, `implicit`, `parametric`",
+            "the body: shape text whose `p` is the point argument",
+        ),
+        key_without_default(
+            "implicit",
+            Kind::Str,
+            "one of the three",
+            "an equation f = 0 in `x`, `y`, `z` (also `p`), the parameters and the built-ins",
+        ),
+        key_without_default(
+            "parametric",
+            Kind::Text("inline table `{ x, y, z }`"),
+            "one of the three",
+            "the coordinates as expressions in `s`, `t`, the parameters and the built-ins; rational ones are implicitized",
+        ),
+        key_without_default(
+            "domain",
+            Kind::Text("inline table `{ s = [min, max], t = [min, max] }`"),
+            "`[-1.0, 1.0]` each",
+            "parametric only: the parameter domain (numerical check, `image_only`, tessellation)",
+        ),
+        key(
+            "image_only",
+            boolean(),
+            "false",
+            "parametric only: keep only points with a real preimage in the domain",
+        ),
+        key(
+            "bound",
+            Kind::Choice(vec!["auto", "taylor", "lipschitz", "first-order"]),
+            "\"auto\"",
+            "implicit and parametric: the distance bound traced (Taylor-root bound for polynomials, Lipschitz bound over a ball otherwise)",
+        ),
+        key(
+            "lipschitz_factor",
+            num(LIPSCHITZ),
+            "1.0",
+            "implicit and parametric: the traced distance is divided by it",
+        ),
+        key_without_default(
+            "material",
+            Kind::Str,
+            "none",
+            "the material of objects that call this surface and name no material",
+        ),
+    ]
+}
+
+/// Every key of the `[environment]` table.
+pub fn environment_keys() -> Vec<KeySpec> {
+    vec![
+        key_without_default(
+            "image",
+            Kind::Str,
+            "one of `image`, `cube`, `gradient`",
+            "an equirectangular map: a Radiance `.hdr`, OpenEXR `.exr` (linear) or 8-bit `.png` (sRGB, converted to linear), relative to the scene file",
+        ),
+        key_without_default(
+            "cube",
+            Kind::Text("inline table `{ px, nx, py, ny, pz, nz }`"),
+            "one of `image`, `cube`, `gradient`",
+            "six square faces of the same size, named by the axis each faces (OpenGL cube-map layout)",
+        ),
+        key_without_default(
+            "gradient",
+            Kind::Text("inline table `{ zenith, horizon, nadir }`"),
+            "one of `image`, `cube`, `gradient`",
+            "a sky: `horizon` (default `[0.85, 0.88, 0.93]`) at the horizon blending linearly with the height of the direction to `zenith` (default `[0.35, 0.5, 0.8]`) straight up and `nadir` (default `[0.3, 0.3, 0.32]`) straight down; `gradient = {}` takes all three defaults",
+        ),
+        key("rotation", num(ANGLE), "0.0", "turn about +y, degrees (right-handed)"),
+        key("intensity", num(Range::NON_NEGATIVE), "1.0", "multiplies the map"),
+    ]
+}
+
+/// The documented tables: the heading of each in `docs/SCENE.md` and its keys.
+pub fn key_tables() -> Vec<(&'static str, Vec<KeySpec>)> {
+    vec![
+        ("### `[camera]`", camera_keys()),
+        ("### `[environment]`", environment_keys()),
+        ("### `[render]`", render_keys()),
+        ("### `[[light]]`", light_keys()),
+        ("### `[material.NAME]`", material_keys()),
+        ("### `[surface.NAME]`", surface_keys()),
+        ("### `[[object]]`", object_keys()),
+    ]
 }
 
 /// An object (`[[object]]`): a shape with a material.
@@ -488,58 +774,118 @@ pub struct Scene {
     pub(crate) origin: std::sync::Arc<SceneOrigin>,
 }
 
-/// A checked value for [`Scene::set_value`].
-#[derive(Debug, Clone, Copy)]
-enum SetValue {
-    CameraPosition(Vec3),
-    CameraTarget(Vec3),
-    CameraFov(f64),
-    Light(usize, LightValue),
-    Material(usize, MaterialValue),
+/// The values that [`Scene::set_value`] and driven expressions change,
+/// gathered so that a set of changes is checked before any is stored.
+#[derive(Debug, Clone)]
+struct Values {
+    camera: Camera,
+    lights: Vec<Light>,
+    materials: Vec<Material>,
 }
 
-#[derive(Debug, Clone, Copy)]
-enum LightValue {
-    Intensity(f64),
-    Size(f64),
-    Color(Vec3),
-    Attenuation(Vec3),
-    Direction(Vec3),
-    Position(Vec3),
-    Radius(f64),
-    U(Vec3),
-    V(Vec3),
+impl Values {
+    /// Sets the value of `key` (as [`Scene::set_value`] describes), checked
+    /// against the key's description and the rules the loader applies.
+    fn set(&mut self, key: &str, value: &[f64]) -> Result<(), crate::SceneError> {
+        let shown = value.iter().map(|x| format!("{x}")).collect::<Vec<_>>().join(", ");
+        let err = |what: &str| crate::SceneError::usage(format!("`{key}` = {shown}: expected {what}"));
+        let unknown = || crate::SceneError::usage(format!("`{key}` is not a value that can be set or driven"));
+        let set = |r: Option<Result<(), String>>| match r {
+            None => Err(unknown()),
+            Some(r) => r.map_err(|what| err(&what)),
+        };
+        let three = |spec: &KeySpec| {
+            spec.check_numbers(value)
+                .map(|v| [v[0], v[1], v[2]])
+                .map_err(|what| err(&what))
+        };
+        let parts: Vec<&str> = key.split('.').collect();
+        match parts[..] {
+            ["camera", field] => {
+                let mut camera = self.camera.clone();
+                set(camera.set_numbers(field, value))?;
+                camera.check().map_err(|p| err(p.expected()))?;
+                self.camera = camera;
+                Ok(())
+            }
+            ["light", i, field] => {
+                let Some(light) = i.parse::<usize>().ok().and_then(|k| self.lights.get_mut(k)) else {
+                    return Err(crate::SceneError::usage(format!(
+                        "`{key}`: the scene has {} light(s)",
+                        self.lights.len()
+                    )));
+                };
+                let keys = light_keys();
+                let Some(spec) = keys.iter().find(|k| k.name == field) else {
+                    return Err(unknown());
+                };
+                let misplaced = || crate::SceneError::usage(format!("`{key}` does not apply to this kind of light"));
+                match (field, &mut light.kind) {
+                    ("direction", LightKind::Directional { direction }) => {
+                        let d = three(spec)?;
+                        if norm3(d) < 1e-12 {
+                            return Err(err("a direction towards the light (not zero)"));
+                        }
+                        *direction = unit(d);
+                    }
+                    (
+                        "position",
+                        LightKind::Point { position }
+                        | LightKind::Sphere { position, .. }
+                        | LightKind::Rect { position, .. },
+                    ) => *position = three(spec)?,
+                    ("radius", LightKind::Sphere { radius, .. }) => {
+                        *radius = spec.check_numbers(value).map_err(|what| err(&what))?[0]
+                    }
+                    ("u" | "v", LightKind::Rect { u, v, .. }) => {
+                        let e = three(spec)?;
+                        let (nu, nv) = if field == "u" { (e, *v) } else { (*u, e) };
+                        if norm3(cross3(nu, nv)) < 1e-12 {
+                            return Err(err("an edge that is not parallel to the other one (or zero)"));
+                        }
+                        (*u, *v) = (nu, nv);
+                    }
+                    ("direction" | "position" | "radius" | "u" | "v", _) => return Err(misplaced()),
+                    _ => set(light.set_numbers(field, value))?,
+                }
+                Ok(())
+            }
+            ["material", name, field] => {
+                let Some(m) = self.materials.iter_mut().find(|m| m.name == name) else {
+                    return Err(crate::SceneError::usage(format!(
+                        "`{key}`: no material named \"{name}\""
+                    )));
+                };
+                if field == "checker_size" {
+                    let keys = material_keys();
+                    let size = crate::schema::spec(&keys, field)
+                        .check_numbers(value)
+                        .map_err(|what| err(&what))?[0];
+                    let Some(checker) = &mut m.checker else {
+                        return Err(crate::SceneError::usage(format!(
+                            "`{key}`: the material has no `checker`"
+                        )));
+                    };
+                    checker.1 = size;
+                    return Ok(());
+                }
+                set(m.set_numbers(field, value))
+            }
+            _ => Err(unknown()),
+        }
+    }
 }
 
-#[derive(Debug, Clone, Copy)]
-enum MaterialValue {
-    /// ambient, diffuse, specular, emission, absorption, reflectivity (by index).
-    Colour(usize, Vec3),
-    Shininess(f64),
-    Transparency(f64),
-    Ior(f64),
+pub(crate) fn norm3(a: Vec3) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
-fn field_index(field: &str) -> usize {
+pub(crate) fn cross3(a: Vec3, b: Vec3) -> Vec3 {
     [
-        "ambient",
-        "diffuse",
-        "specular",
-        "emission",
-        "absorption",
-        "reflectivity",
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
     ]
-    .iter()
-    .position(|f| *f == field)
-    .unwrap_or(5)
-}
-
-fn nonneg(x: f64) -> Option<f64> {
-    (x >= 0.0).then_some(x)
-}
-
-fn positive(x: f64) -> Option<f64> {
-    (x > 0.0).then_some(x)
 }
 
 /// A scene value written as shape text of the time and the parameters,
@@ -693,192 +1039,51 @@ impl Scene {
 
     /// Sets a camera, light or material value by its dotted key, as written
     /// in the file: `camera.position`, `camera.fov`, `light.0.intensity`,
-    /// `light.1.color`, `material.gold.diffuse`, … `value` has 3 components
-    /// for vectors and colours (1 gives a grey colour) and 1 for numbers.
-    /// The value is checked as the loader checks it; an error changes nothing.
+    /// `light.1.color`, `material.gold.diffuse`, … — every key whose
+    /// description ([`crate::schema::KeySpec::is_numeric`]) is numbers.
+    /// `value` has 3 components for vectors and colours (1 gives a grey
+    /// colour) and 1 for numbers. The value is checked as the loader checks
+    /// it; an error changes nothing.
     pub fn set_value(&mut self, key: &str, value: &[f64]) -> Result<(), crate::SceneError> {
-        let v = self.check_value(key, value)?;
-        self.store_value(v);
+        let mut values = self.values();
+        values.set(key, value)?;
+        self.store_values(values);
         Ok(())
     }
 
-    /// Checks a value for [`Scene::set_value`] without storing it.
-    fn check_value(&self, key: &str, value: &[f64]) -> Result<SetValue, crate::SceneError> {
-        let err = |what: &str| {
-            crate::SceneError::usage(format!(
-                "`{key}` = {}: expected {what}",
-                value.iter().map(|x| format!("{x}")).collect::<Vec<_>>().join(", ")
-            ))
-        };
-        let one = || match value {
-            [x] if x.is_finite() => Ok(*x),
-            _ => Err(err("one number")),
-        };
-        let three = || match value {
-            [x, y, z] if [x, y, z].iter().all(|v| v.is_finite()) => Ok([*x, *y, *z]),
-            _ => Err(err("three numbers")),
-        };
-        let colour = |lo: f64, hi: f64| {
-            let c = match value {
-                [x] => [*x; 3],
-                [x, y, z] => [*x, *y, *z],
-                _ => return Err(err("a colour: one number or three")),
-            };
-            if c.iter().all(|v| v.is_finite() && *v >= lo && *v <= hi) {
-                Ok(c)
-            } else if hi.is_infinite() {
-                Err(err("a colour with components ≥ 0"))
-            } else {
-                Err(err("a colour with components from 0 to 1"))
-            }
-        };
-        let parts: Vec<&str> = key.split('.').collect();
-        let unknown = || crate::SceneError::usage(format!("`{key}` is not a value that can be set or driven"));
-        Ok(match parts[..] {
-            ["camera", "position"] => SetValue::CameraPosition(three()?),
-            ["camera", "target"] => SetValue::CameraTarget(three()?),
-            ["camera", "fov"] => {
-                let f = one()?;
-                if !FOV.contains(f) {
-                    return Err(err(FOV.expected));
-                }
-                SetValue::CameraFov(f)
-            }
-            ["light", i, field] => {
-                let Some(index) = i.parse::<usize>().ok().filter(|&k| k < self.lights.len()) else {
-                    return Err(crate::SceneError::usage(format!(
-                        "`{key}`: the scene has {} light(s)",
-                        self.lights.len()
-                    )));
-                };
-                let kind = self.lights[index].kind;
-                let v = match (field, kind) {
-                    ("intensity", _) => LightValue::Intensity(nonneg(one()?).ok_or_else(|| err("a number ≥ 0"))?),
-                    ("size", _) => LightValue::Size(positive(one()?).ok_or_else(|| err("a positive number"))?),
-                    ("color", _) => LightValue::Color(colour(0.0, f64::INFINITY)?),
-                    ("attenuation", _) => LightValue::Attenuation(colour(0.0, f64::INFINITY)?),
-                    ("direction", LightKind::Directional { .. }) => {
-                        let d = three()?;
-                        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                        if n < 1e-12 {
-                            return Err(err("a direction towards the light (not zero)"));
-                        }
-                        LightValue::Direction(d.map(|x| x / n))
-                    }
-                    ("position", LightKind::Point { .. } | LightKind::Sphere { .. } | LightKind::Rect { .. }) => {
-                        LightValue::Position(three()?)
-                    }
-                    ("radius", LightKind::Sphere { .. }) => {
-                        LightValue::Radius(positive(one()?).ok_or_else(|| err("a positive number"))?)
-                    }
-                    ("u", LightKind::Rect { .. }) => LightValue::U(three()?),
-                    ("v", LightKind::Rect { .. }) => LightValue::V(three()?),
-                    ("direction" | "position" | "radius" | "u" | "v", _) => {
-                        return Err(crate::SceneError::usage(format!(
-                            "`{key}` does not apply to this kind of light"
-                        )))
-                    }
-                    _ => return Err(unknown()),
-                };
-                SetValue::Light(index, v)
-            }
-            ["material", name, field] => {
-                let Some(index) = self.materials.iter().position(|m| m.name == name) else {
-                    return Err(crate::SceneError::usage(format!(
-                        "`{key}`: no material named \"{name}\""
-                    )));
-                };
-                let v = match field {
-                    "ambient" | "diffuse" | "specular" | "emission" | "absorption" => {
-                        MaterialValue::Colour(field_index(field), colour(0.0, f64::INFINITY)?)
-                    }
-                    "reflectivity" => MaterialValue::Colour(field_index(field), colour(0.0, 1.0)?),
-                    "shininess" => MaterialValue::Shininess(positive(one()?).ok_or_else(|| err("a positive number"))?),
-                    "transparency" => {
-                        let x = one()?;
-                        if !(0.0..=1.0).contains(&x) {
-                            return Err(err("a number from 0 to 1"));
-                        }
-                        MaterialValue::Transparency(x)
-                    }
-                    "ior" => {
-                        let x = one()?;
-                        if !(1.0..=10.0).contains(&x) {
-                            return Err(err("an index of refraction from 1 to 10"));
-                        }
-                        MaterialValue::Ior(x)
-                    }
-                    _ => return Err(unknown()),
-                };
-                SetValue::Material(index, v)
-            }
-            _ => return Err(unknown()),
-        })
-    }
-
-    fn store_value(&mut self, v: SetValue) {
-        match v {
-            SetValue::CameraPosition(p) => self.camera.position = p,
-            SetValue::CameraTarget(p) => self.camera.target = p,
-            SetValue::CameraFov(f) => self.camera.fov = f,
-            SetValue::Light(i, v) => {
-                let l = &mut self.lights[i];
-                match (v, &mut l.kind) {
-                    (LightValue::Intensity(x), _) => l.intensity = x,
-                    (LightValue::Size(x), _) => l.size = x,
-                    (LightValue::Color(c), _) => l.color = c,
-                    (LightValue::Attenuation(c), _) => l.attenuation = c,
-                    (LightValue::Direction(d), LightKind::Directional { direction }) => *direction = d,
-                    (
-                        LightValue::Position(p),
-                        LightKind::Point { position }
-                        | LightKind::Sphere { position, .. }
-                        | LightKind::Rect { position, .. },
-                    ) => *position = p,
-                    (LightValue::Radius(r), LightKind::Sphere { radius, .. }) => *radius = r,
-                    (LightValue::U(e), LightKind::Rect { u, .. }) => *u = e,
-                    (LightValue::V(e), LightKind::Rect { v, .. }) => *v = e,
-                    _ => {}
-                }
-            }
-            SetValue::Material(i, v) => {
-                let m = &mut self.materials[i];
-                match v {
-                    MaterialValue::Colour(k, c) => match k {
-                        0 => m.ambient = c,
-                        1 => m.diffuse = c,
-                        2 => m.specular = c,
-                        3 => m.emission = c,
-                        4 => m.absorption = c,
-                        _ => m.reflectivity = c,
-                    },
-                    MaterialValue::Shininess(x) => m.shininess = x,
-                    MaterialValue::Transparency(x) => m.transparency = x,
-                    MaterialValue::Ior(x) => m.ior = x,
-                }
-            }
+    fn values(&self) -> Values {
+        Values {
+            camera: self.camera.clone(),
+            lights: self.lights.clone(),
+            materials: self.materials.clone(),
         }
     }
 
-    /// The driven values at the inputs `vars`, checked.
-    fn driven_values(&self, vars: &[f64]) -> Result<Vec<SetValue>, crate::SceneError> {
+    fn store_values(&mut self, v: Values) {
+        self.camera = v.camera;
+        self.lights = v.lights;
+        self.materials = v.materials;
+    }
+
+    /// The camera, lights and materials with every driven value computed
+    /// at the inputs `vars`, checked.
+    fn driven_values(&self, vars: &[f64]) -> Result<Values, crate::SceneError> {
         let t = vars.first().copied().unwrap_or(0.0);
-        self.driven
-            .iter()
-            .map(|d| {
-                let v: Vec<f64> = d.values.iter().map(|s| s.eval_with(vars, [0.0; 3])).collect();
-                self.check_value(&d.key, &v)
-                    .map_err(|e| crate::SceneError::usage(format!("{} (at t = {t}, from its expression)", e.message)))
-            })
-            .collect()
+        let mut values = self.values();
+        for d in &self.driven {
+            let v: Vec<f64> = d.values.iter().map(|s| s.eval_with(vars, [0.0; 3])).collect();
+            values
+                .set(&d.key, &v)
+                .map_err(|e| crate::SceneError::usage(format!("{} (at t = {t}, from its expression)", e.message)))?;
+        }
+        Ok(values)
     }
 
     /// Applies new inputs: recompiles objects that bound a changed one, and
     /// re-derives the closed forms of objects that read one.
     fn apply_inputs(&mut self, next: Vec<f64>, changed: Vec<u32>) -> Result<(), crate::SceneError> {
-        for v in self.driven_values(&next)? {
-            self.store_value(v);
-        }
+        let values = self.driven_values(&next)?;
+        self.store_values(values);
         self.inputs = next;
         let vars = &changed[..];
         let bound = self

@@ -27,6 +27,12 @@ pub enum Kind {
     Colour,
     /// A point or direction: three finite numbers.
     Vector,
+    /// A number or colour with components in [0, 1] (a number is grey).
+    UnitColour,
+    /// A string (a name, a path or shape text).
+    Str,
+    /// A structured value, described by its type column (`inline table { x, y, z }`).
+    Text(&'static str),
 }
 
 /// A range of finite numbers.
@@ -81,10 +87,42 @@ pub struct KeySpec {
     pub name: &'static str,
     /// What it takes.
     pub kind: Kind,
-    /// The default as the file would write it.
+    /// The default as the file would write it (empty when there is none).
     pub default: String,
+    /// What leaving the key out means when there is no default (`required`,
+    /// `none`), as the docs write it.
+    pub absent: &'static str,
     /// What it does (one line, Markdown).
     pub doc: &'static str,
+}
+
+/// A key with a default written as the file would write it.
+pub fn key(name: &'static str, kind: Kind, default: &str, doc: &'static str) -> KeySpec {
+    KeySpec {
+        name,
+        kind,
+        default: default.to_string(),
+        absent: "",
+        doc,
+    }
+}
+
+/// A key without a default: `absent` says what leaving it out means.
+pub fn key_without_default(name: &'static str, kind: Kind, absent: &'static str, doc: &'static str) -> KeySpec {
+    KeySpec {
+        name,
+        kind,
+        default: String::new(),
+        absent,
+        doc,
+    }
+}
+
+/// Finds a key of a table's description.
+pub fn spec<'a>(keys: &'a [KeySpec], name: &str) -> &'a KeySpec {
+    keys.iter()
+        .find(|k| k.name == name)
+        .unwrap_or_else(|| panic!("no key `{name}` in the description"))
 }
 
 impl KeySpec {
@@ -97,6 +135,79 @@ impl KeySpec {
             Kind::Choice(_) => "string",
             Kind::Colour => "colour",
             Kind::Vector => "vector",
+            Kind::UnitColour => "number or colour",
+            Kind::Str => "string",
+            Kind::Text(t) => t,
+        }
+    }
+
+    /// The default of a number key.
+    pub fn default_f64(&self) -> f64 {
+        self.default
+            .parse()
+            .unwrap_or_else(|_| panic!("`{}` has a number default", self.name))
+    }
+
+    /// The default of a vector or colour key.
+    pub fn default_vec3(&self) -> [f64; 3] {
+        let v: Vec<f64> = self
+            .default
+            .trim_matches(|c| c == '[' || c == ']')
+            .split(',')
+            .map(|x| x.trim().parse().unwrap_or(f64::NAN))
+            .collect();
+        match v[..] {
+            [a, b, c] if v.iter().all(|x| x.is_finite()) => [a, b, c],
+            _ => panic!("`{}` has a default of three numbers", self.name),
+        }
+    }
+
+    /// True for keys whose value is numbers (a number, a colour, a vector):
+    /// the keys that may also be written as shape text of `t` and the
+    /// parameters, and set live with `Scene::set_value`.
+    pub fn is_numeric(&self) -> bool {
+        matches!(self.kind, Kind::Num(_) | Kind::Colour | Kind::Vector | Kind::UnitColour)
+    }
+
+    /// Checks numbers given for this key from outside (a driven expression,
+    /// a slider): one number for a number key, three for vectors and
+    /// colours (one gives a grey colour). Returns the value's components,
+    /// or what was expected.
+    pub fn check_numbers(&self, value: &[f64]) -> Result<Vec<f64>, String> {
+        if value.iter().any(|x| !x.is_finite()) {
+            return Err(self.expected());
+        }
+        let ok = match (&self.kind, value) {
+            (Kind::Num(r), [x]) => r.contains(*x),
+            (Kind::Vector, [_, _, _]) => true,
+            (Kind::Colour, [x]) if *x >= 0.0 => return Ok(vec![*x; 3]),
+            (Kind::Colour, [_, _, _]) => value.iter().all(|x| *x >= 0.0),
+            (Kind::UnitColour, [x]) if (0.0..=1.0).contains(x) => return Ok(vec![*x; 3]),
+            (Kind::UnitColour, [_, _, _]) => value.iter().all(|x| (0.0..=1.0).contains(x)),
+            _ => false,
+        };
+        if ok {
+            Ok(value.to_vec())
+        } else {
+            Err(self.expected())
+        }
+    }
+
+    /// What a value of this key must be, as errors say it.
+    pub fn expected(&self) -> String {
+        match &self.kind {
+            Kind::Int { lo, hi } => format!("an integer from {lo} to {hi}"),
+            Kind::Num(r) => r.expected.to_string(),
+            Kind::Bool => "`true` or `false`".to_string(),
+            Kind::Choice(names) => format!(
+                "one of {}",
+                names.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ")
+            ),
+            Kind::Colour => "a colour: one number or three, each ≥ 0".to_string(),
+            Kind::Vector => "three numbers".to_string(),
+            Kind::UnitColour => "a number from 0 to 1, or a colour [r, g, b] of such numbers".to_string(),
+            Kind::Str => "a string".to_string(),
+            Kind::Text(t) => t.to_string(),
         }
     }
 
@@ -112,7 +223,8 @@ impl KeySpec {
                 .collect::<Vec<_>>()
                 .join(", "),
             Kind::Colour => "components ≥ 0".to_string(),
-            Kind::Vector => String::new(),
+            Kind::UnitColour => "components in [0, 1]".to_string(),
+            Kind::Vector | Kind::Str | Kind::Text(_) => String::new(),
         }
     }
 
@@ -125,11 +237,16 @@ impl KeySpec {
         } else {
             format!("{allowed} ")
         };
+        let default = if self.default.is_empty() {
+            self.absent.to_string()
+        } else {
+            format!("`{}`", self.default)
+        };
         format!(
-            "| `{}` | {} | `{}` | {}| {} |",
+            "| `{}` | {} | {} | {}| {} |",
             self.name,
             self.type_name(),
-            self.default,
+            default,
             allowed,
             self.doc
         )
@@ -142,9 +259,12 @@ pub fn names(keys: &[KeySpec]) -> Vec<&'static str> {
 }
 
 /// Declares a settings table: the struct, its `Default`, its key
-/// descriptions and a reader. Each entry is
+/// descriptions, a reader and a setter. Each entry is
 /// `/// doc` `name: Type = default, kind, "meaning in the docs";`
-/// with `kind` one of [`int`], [`num`], [`boolean`], [`choice`], [`colour`].
+/// with `kind` one of [`int`], [`num`], [`boolean`], [`choice`], [`colour`],
+/// [`vector`], [`unit_colour`]. An optional `extra { … }` block after the
+/// keys declares fields that are not keys of their own (they are read by
+/// hand from keys described separately), with their defaults.
 macro_rules! settings {
     (
         $(#[$meta:meta])*
@@ -154,6 +274,12 @@ macro_rules! settings {
                 $field:ident : $ty:ty = $default:expr, $kind:expr, $doc:literal;
             )*
         }
+        $(extra {
+            $(
+                $(#[doc = $xdoc:literal])*
+                $xfield:ident : $xty:ty = $xdefault:expr;
+            )*
+        })?
     ) => {
         $(#[$meta])*
         #[derive(Debug, Clone, PartialEq)]
@@ -162,12 +288,17 @@ macro_rules! settings {
                 $(#[doc = $fdoc])*
                 pub $field: $ty,
             )*
+            $($(
+                $(#[doc = $xdoc])*
+                pub $xfield: $xty,
+            )*)?
         }
 
         impl Default for $name {
             fn default() -> Self {
                 $name {
                     $($field: $default,)*
+                    $($($xfield: $xdefault,)*)?
                 }
             }
         }
@@ -181,6 +312,7 @@ macro_rules! settings {
                         name: stringify!($field),
                         kind: $kind,
                         default: $crate::schema::DocValue::doc_text(&d.$field),
+                        absent: "",
                         doc: $doc,
                     },
                 )*
@@ -189,7 +321,8 @@ macro_rules! settings {
 
         impl $name {
             /// Reads the table's keys (absent keys take their defaults),
-            /// checking each against its description.
+            /// checking each against its description; the extra fields
+            /// take their defaults.
             pub(crate) fn read(r: &mut $crate::load::Reader) -> Result<Self, $crate::SceneError> {
                 let d = $name::default();
                 let keys = $keys();
@@ -197,7 +330,25 @@ macro_rules! settings {
                 $(
                     let $field: $ty = $crate::schema::FromKey::from_key(r, keys.next().expect("one spec per field"), d.$field)?;
                 )*
-                Ok($name { $($field,)* })
+                #[allow(clippy::needless_update)]
+                Ok($name { $($field,)* ..d })
+            }
+
+            /// Sets a numeric key from numbers checked against its
+            /// description: `None` when `key` is not one of this table's
+            /// numeric keys, `Some(Err(expected))` when the value does not fit.
+            #[allow(dead_code)]
+            pub(crate) fn set_numbers(&mut self, key: &str, value: &[f64]) -> Option<Result<(), String>> {
+                let keys = $keys();
+                let mut keys = keys.iter();
+                $(
+                    let spec = keys.next().expect("one spec per field");
+                    if key == stringify!($field) {
+                        return $crate::schema::FromNumbers::from_numbers(spec, value)
+                            .map(|r| r.map(|v| self.$field = v));
+                    }
+                )*
+                None
             }
         }
     };
@@ -245,6 +396,10 @@ pub fn colour() -> Kind {
 /// A point or direction.
 pub fn vector() -> Kind {
     Kind::Vector
+}
+/// A number or colour with components in [0, 1].
+pub fn unit_colour() -> Kind {
+    Kind::UnitColour
 }
 
 /// A default as the file would write it.
@@ -313,10 +468,37 @@ impl FromKey for [f64; 3] {
     fn from_key(r: &mut crate::load::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
         match spec.kind {
             Kind::Vector => r.vec3(spec.name, default),
+            Kind::UnitColour => r.unit_color(spec.name, default),
             _ => r.color(spec.name, default),
         }
     }
 }
+
+/// Values that can be set from numbers given from outside (sliders,
+/// driven expressions): numbers and triples. Integers, booleans and
+/// choices cannot.
+pub(crate) trait FromNumbers: Sized {
+    /// `None` when values of this type are not set from numbers.
+    fn from_numbers(_spec: &KeySpec, _value: &[f64]) -> Option<Result<Self, String>> {
+        None
+    }
+}
+
+impl FromNumbers for f64 {
+    fn from_numbers(spec: &KeySpec, value: &[f64]) -> Option<Result<Self, String>> {
+        Some(spec.check_numbers(value).map(|v| v[0]))
+    }
+}
+
+impl FromNumbers for [f64; 3] {
+    fn from_numbers(spec: &KeySpec, value: &[f64]) -> Option<Result<Self, String>> {
+        Some(spec.check_numbers(value).map(|v| [v[0], v[1], v[2]]))
+    }
+}
+
+impl FromNumbers for u32 {}
+impl FromNumbers for bool {}
+impl<T: Named> FromNumbers for T {}
 
 /// An enumeration read from one of its names.
 pub trait Named: Sized + Copy + PartialEq + 'static {

@@ -145,17 +145,57 @@ fn table_after(md: &str, heading: &str) -> Vec<String> {
 #[test]
 fn key_tables_are_the_schema() {
     let md = scene_md();
-    for (table, keys) in [
-        ("render", isoray_scene::render_keys()),
-        ("camera", isoray_scene::camera_keys()),
-    ] {
+    for (heading, keys) in isoray_scene::key_tables() {
         let want: Vec<String> = keys.iter().map(|k| k.doc_row()).collect();
-        let have = table_after(&md, &format!("### `[{table}]`"));
+        let have = table_after(&md, heading);
         if have != want {
             panic!(
-                "the [{table}] table of SCENE.md differs from the key schema (crates/isoray-scene/src/model.rs); it should read:\n{}",
+                "the table under {heading} in SCENE.md differs from the key schema (crates/isoray-scene/src/model.rs); it should read:\n{}",
                 want.join("\n")
             );
         }
+    }
+}
+
+/// Unknown keys are reported with the known keys of their table, from the schema.
+#[test]
+fn unknown_keys_list_the_schema() {
+    for (table, text, keys) in [
+        (
+            "light.0",
+            "[[light]]\nkind = \"point\"\nposition = [0.0, 1.0, 0.0]\nbogus = 1",
+            isoray_scene::light_keys(),
+        ),
+        ("material.m", "[material.m]\nbogus = 1", isoray_scene::material_keys()),
+        (
+            "object.0",
+            "[[object]]\nshape = \"sphere(p, 1.0)\"\nbogus = 1",
+            isoray_scene::object_keys(),
+        ),
+        (
+            "surface.s",
+            "[surface.s]\nsdf = \"length(p) - 1.0\"\nbogus = 1",
+            isoray_scene::surface_keys(),
+        ),
+        (
+            "environment",
+            "[environment]\ngradient = {}\nbogus = 1",
+            isoray_scene::environment_keys(),
+        ),
+    ] {
+        let e = isoray_scene::load_str(text, "t.toml", &[]).unwrap_err();
+        let names: Vec<&str> = keys.iter().map(|k| k.name).collect();
+        assert!(
+            e.message.contains(&format!("unknown key `bogus` in `{table}`")),
+            "{}",
+            e.message
+        );
+        assert!(
+            e.notes
+                .iter()
+                .any(|n| n == &format!("known keys: {}", names.join(", "))),
+            "{:?}",
+            e.notes
+        );
     }
 }

@@ -192,3 +192,59 @@ fn closed_forms_follow_parameters() {
     s.set_param("r", Value::Float(0.9)).unwrap();
     assert!((radius(&s) - 0.9).abs() < 1e-9);
 }
+
+/// Every numeric key of the camera, light and material descriptions can be
+/// driven by an expression and set live, and is checked by its description.
+#[test]
+fn every_numeric_key_is_driven_and_settable() {
+    let text = r#"
+[camera]
+position = [0.0, 0.0, 5.0]
+up = ["sin(t)", 1.0, 0.0]
+[[light]]
+kind = "rect"
+position = [0.0, 3.0, 0.0]
+u = [1.0, 0.0, 0.0]
+v = [0.0, 0.0, 1.0]
+[material.m]
+checker = "default"
+checker_size = "0.5 + t"
+[[object]]
+material = "m"
+shape = "sphere(p, 1.0)"
+"#;
+    let mut s = isoray_scene::load_str(text, "t.toml", &[]).unwrap();
+    assert_eq!(s.camera.up, [0.0, 1.0, 0.0]);
+    assert_eq!(s.materials[1].checker.map(|c| c.1), Some(0.5));
+    s.set_time(0.25).unwrap();
+    assert_eq!(s.camera.up[0], 0.25f64.sin());
+    assert_eq!(s.materials[1].checker.map(|c| c.1), Some(0.75));
+    let numeric: Vec<&str> = isoray_scene::camera_keys()
+        .iter()
+        .filter(|k| k.is_numeric())
+        .map(|k| k.name)
+        .collect();
+    assert_eq!(numeric, ["position", "target", "up", "fov"]);
+    s.set_value("camera.position", &[0.0, 1.0, 6.0]).unwrap();
+    s.set_value("camera.target", &[0.0, 0.5, 0.0]).unwrap();
+    s.set_value("camera.up", &[0.1, 1.0, 0.0]).unwrap();
+    s.set_value("camera.fov", &[30.0]).unwrap();
+    assert_eq!(s.camera.fov, 30.0);
+    // The target may not meet the position, nor `up` lie along the view.
+    assert!(s.set_value("camera.target", &[0.0, 1.0, 6.0]).is_err());
+    assert!(s.set_value("camera.up", &[0.0, 0.5, 6.0]).is_err());
+    assert_eq!(s.camera.target, [0.0, 0.5, 0.0]);
+    // A value outside its description's range is an error naming what was expected.
+    let e = s.set_value("camera.fov", &[200.0]).unwrap_err();
+    assert!(e.message.contains("between 0 and 180"), "{}", e.message);
+    let e = s.set_value("light.0.intensity", &[-1.0]).unwrap_err();
+    assert!(e.message.contains("≥ 0"), "{}", e.message);
+    // Rect edges must stay across each other.
+    assert!(s.set_value("light.0.v", &[2.0, 0.0, 0.0]).is_err());
+    s.set_value("light.0.v", &[0.0, 1.0, 0.0]).unwrap();
+    // Integers, booleans and choices are not set from numbers.
+    assert!(s.set_value("light.0.samples", &[4.0]).is_err());
+    assert!(s.set_value("material.m.model", &[1.0]).is_err());
+    s.set_value("material.m.checker_size", &[2.0]).unwrap();
+    assert_eq!(s.materials[1].checker.map(|c| c.1), Some(2.0));
+}
