@@ -543,12 +543,12 @@ impl<'s> Worker<'s> {
         };
         Worker {
             scene_eval: Field::new(ctx.scene.shape.tape(), vars),
-            surf_eval: Field::new(ctx.scene.surfaces.tape(), vars),
+            surf_eval: Field::new(ctx.scene.derived().surfaces.tape(), vars),
             counts: RayCounts::default(),
-            rest_eval: ctx.scene.rest.as_ref().map(|r| Field::new(r.tape(), vars)),
+            rest_eval: ctx.scene.derived().rest.as_ref().map(|r| Field::new(r.tape(), vars)),
             caps: Vec::new(),
             tile_origin: (0, 0),
-            shadow_evals: ctx.scene.shadow.as_ref().map(|sh| whitted::ShadowEvals {
+            shadow_evals: ctx.scene.derived().shadow.as_ref().map(|sh| whitted::ShadowEvals {
                 opaque: Field::new(sh.opaque.tape(), vars),
                 clear: Field::new(sh.transparent.tape(), vars),
                 clear_surfaces: Field::new(sh.transparent_surfaces.tape(), vars),
@@ -573,6 +573,7 @@ impl<'s> Worker<'s> {
                     let d = [self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]];
                     let t = ctx
                         .scene
+                        .derived()
                         .analytic
                         .iter()
                         .flatten()

@@ -609,9 +609,13 @@ shape = "torus(p - vec3(1.2, 0.4, 0.0), 0.7, 0.3)"
         ..RenderOptions::default()
     };
     let closed = load_str(text, "a.toml", &[]).unwrap();
-    assert!(closed.analytic[0].is_some() && closed.analytic[1].is_some() && closed.analytic[2].is_none());
+    assert!(
+        closed.derived().analytic[0].is_some()
+            && closed.derived().analytic[1].is_some()
+            && closed.derived().analytic[2].is_none()
+    );
     let marched = load_str(text, "a.toml", &["render.analytic=false".to_string()]).unwrap();
-    assert!(marched.rest.is_none());
+    assert!(marched.derived().rest.is_none());
     let (a, _) = render(&closed, &aovs);
     let (b, _) = render(&marched, &aovs);
     let (da, db) = (a.depth.unwrap(), b.depth.unwrap());

@@ -23,6 +23,8 @@
 #![allow(clippy::result_large_err)]
 
 pub mod analytic;
+mod compile;
+mod derive;
 pub mod doc;
 pub mod env;
 mod error;
@@ -31,6 +33,8 @@ mod model;
 mod save;
 pub mod schema;
 
+pub use compile::{CacheStats, ObjectCache};
+pub use derive::{analytic_allowed, Derived};
 pub use error::{SceneError, Sources};
 pub use load::{load, load_str, load_str_with, load_with, LoadOptions};
 pub use model::*;

@@ -30,6 +30,11 @@ pub struct LoadOptions {
     /// Stops a load in a long surface analysis (implicitization); the
     /// load then fails with [`SceneError::cancelled`] set.
     pub cancel: Option<isoray_job::CancelToken>,
+    /// Compiled objects to reuse (and fill), shared with earlier loads: an
+    /// object whose shape, placement and called surfaces are unchanged is
+    /// not compiled again. The scene keeps the cache for its own
+    /// recompilations.
+    pub objects: Option<crate::compile::ObjectCache>,
 }
 
 /// Reads and loads a scene file, applying `--set KEY=VALUE` overrides.
@@ -885,9 +890,8 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
 
     // [[object]]
     let mut transformed = 0usize;
-    let mut builder = Builder::new();
+    let cache = options.objects.clone().unwrap_or_default();
     let mut objects = Vec::new();
-    let mut nodes = Vec::new();
     match top.get("object") {
         None => {}
         Some(v) => {
@@ -958,25 +962,31 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                 let Item::Str(_, map) = &loc.item else { unreachable!() };
                 let id = snippets.len();
                 snippets.push((loc, map));
-                let p = match &transform {
-                    Some(tr) => tr.lower_point(&mut builder),
-                    None => [builder.x(), builder.y(), builder.z()],
-                };
-                let compiled = isoray_shape::syntax::parse(text, id)
-                    .and_then(|prog| lib.compile_at(&mut builder, &prog, id, p))
+                let program = isoray_shape::syntax::parse(text, id).map_err(|d| shape_error(&snippets, d))?;
+                let called = program.functions_called();
+                let key = crate::compile::object_key(&lib, text, transform.is_some(), &called);
+                let fragment = cache
+                    .get_or_compile(key, &lib.input_values(), || {
+                        let mut b = Builder::new();
+                        let p = match &transform {
+                            Some(tr) => tr.lower_point_at(&mut b, crate::compile::FRAGMENT_INPUTS),
+                            None => [b.x(), b.y(), b.z()],
+                        };
+                        let compiled = lib.compile_at(&mut b, &program, id, p)?;
+                        let node = match &transform {
+                            Some(_) => {
+                                Transform::lower_distance_at(&mut b, compiled.node, crate::compile::FRAGMENT_INPUTS)
+                            }
+                            None => compiled.node,
+                        };
+                        Ok((b, node, compiled.bound, called))
+                    })
                     .map_err(|d| shape_error(&snippets, d))?;
-                let node = match &transform {
-                    Some(tr) => tr.lower_distance(&mut builder, compiled.node),
-                    None => compiled.node,
-                };
-                nodes.push(node);
                 // Without a material of its own, an object takes the default
                 // material of the first surface its shape calls.
                 let material = material.unwrap_or_else(|| {
-                    let called = isoray_shape::syntax::parse(text, id)
-                        .map(|p| p.functions_called())
-                        .unwrap_or_default();
-                    called
+                    fragment
+                        .called
                         .iter()
                         .find_map(|c| surface_materials.iter().find(|(n, _)| n == c).map(|(_, k)| *k))
                         .unwrap_or(0)
@@ -985,69 +995,16 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                     name,
                     material,
                     source: text.to_string(),
-                    shape: Shape::from_tape(builder.tape(node)),
-                    bound_inputs: compiled.bound,
+                    shape: constant_shape(EMPTY),
+                    bound_inputs: fragment.bound.clone(),
                     transform,
+                    fragment,
                 });
             }
         }
     }
     top.finish(TOP_KEYS)?;
 
-    // The scene's distance: union, or smooth union with k = blend, folded in
-    // file order (a scene without objects is empty space: every ray misses).
-    let acc = match nodes.split_first() {
-        None => builder.constant(EMPTY),
-        Some((&first, rest)) => rest
-            .iter()
-            .fold(first, |acc, &n| smooth_union(&mut builder, acc, n, render.blend)),
-    };
-    let shape = Shape::from_tape(builder.tape(acc));
-    // The unsigned distance to the nearest object surface, for rays inside objects.
-    let u = match nodes.split_first() {
-        None => builder.constant(EMPTY),
-        Some((&first, rest)) => {
-            let a0 = builder.abs(first);
-            rest.iter().fold(a0, |u, &n| {
-                let a = builder.abs(n);
-                builder.min(u, a)
-            })
-        }
-    };
-    let surfaces = Shape::from_tape(builder.tape(u));
-    // Shadows with transparent objects: opaque objects occlude (with the
-    // penumbra estimate), transparent ones transmit (traced separately).
-    let clear: Vec<bool> = objects
-        .iter()
-        .map(|o| materials[o.material].transparency > 0.0)
-        .collect();
-    let shadow = if clear.iter().any(|&c| c) {
-        let pick = |b: &mut Builder, want: bool, unsigned: bool| {
-            let mut acc: Option<isoray_shape::Node> = None;
-            for (&n, &c) in nodes.iter().zip(&clear) {
-                if c != want {
-                    continue;
-                }
-                let n = if unsigned { b.abs(n) } else { n };
-                acc = Some(match acc {
-                    None => n,
-                    Some(a) if unsigned => b.min(a, n),
-                    Some(a) => smooth_union(b, a, n, render.blend),
-                });
-            }
-            acc.unwrap_or_else(|| b.constant(1e9))
-        };
-        let opaque = pick(&mut builder, false, false);
-        let clear_union = pick(&mut builder, true, false);
-        let clear_surfaces = pick(&mut builder, true, true);
-        Some(ShadowShapes {
-            opaque: Shape::from_tape(builder.tape(opaque)),
-            transparent: Shape::from_tape(builder.tape(clear_union)),
-            transparent_surfaces: Shape::from_tape(builder.tape(clear_surfaces)),
-        })
-    } else {
-        None
-    };
     // Planes and spheres are intersected in closed form; the rest is marched.
     let mut input_names = lib.input_names();
     let mut inputs = lib.input_values();
@@ -1060,29 +1017,8 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
             check_scale(src, i, tr, inputs[tr.inputs as usize + 6])?;
         }
     }
-    let analytic: Vec<Option<crate::analytic::Analytic>> = if analytic_allowed(&render) {
-        objects
-            .iter()
-            .map(|o| crate::analytic::Analytic::recognise(&o.shape, &inputs))
-            .collect()
-    } else {
-        vec![None; objects.len()]
-    };
-    let rest = if analytic.iter().any(Option::is_some) {
-        let mut acc: Option<isoray_shape::Node> = None;
-        for (&n, a) in nodes.iter().zip(&analytic) {
-            if a.is_none() {
-                acc = Some(match acc {
-                    None => n,
-                    Some(x) => builder.min(x, n),
-                });
-            }
-        }
-        let root = acc.unwrap_or_else(|| builder.constant(1e9));
-        Some(Shape::from_tape(builder.tape(root)))
-    } else {
-        None
-    };
+    // The scene's distance and what renderers derive from the objects.
+    let (shape, derived) = crate::derive::assemble(&mut objects, &materials, &render, &inputs);
     Ok(Scene {
         camera,
         render,
@@ -1091,17 +1027,15 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         objects,
         params,
         shape,
-        surfaces,
-        shadow,
+        derived,
         environment,
-        analytic,
-        rest,
         input_names,
         inputs,
         driven,
         library: lib,
         param_ranges,
         origin: std::sync::Arc::new(SceneOrigin { sources: src.clone() }),
+        cache,
     })
 }
 
@@ -1219,7 +1153,7 @@ fn key_at(entries: &[Entry], origin: Origin) -> Option<String> {
 }
 
 /// The distance of empty space (no object), far beyond any ray.
-const EMPTY: f64 = 1e9;
+use crate::derive::EMPTY;
 
 /// The placement keys of an `[[object]]`, in input order.
 const TRANSFORM_KEYS: [&str; 3] = ["position", "rotation", "scale"];
@@ -1334,11 +1268,6 @@ fn uniform_values<'a>(
         }
         _ => Err(bad(v)),
     }
-}
-
-/// Whether objects may be intersected in closed form with these settings.
-pub(crate) fn analytic_allowed(render: &RenderSettings) -> bool {
-    render.blend == 0.0 && render.analytic && render.view != View::Steps
 }
 
 /// `[environment]`: an equirectangular `image` or a `cube` of six faces,
@@ -1540,23 +1469,6 @@ fn parametric_domain(r: &mut Reader, ctx: &str) -> Result<[[f64; 2]; 2]> {
     }
     d.finish(&["s", "t"])?;
     Ok(domain)
-}
-
-/// min(a,b) − max(k−|a−b|,0)²/(4k), or min(a, b) when k = 0.
-fn smooth_union(b: &mut Builder, x: isoray_shape::Node, y: isoray_shape::Node, k: f64) -> isoray_shape::Node {
-    if k <= 0.0 {
-        return b.min(x, y);
-    }
-    let d = b.sub(x, y);
-    let ad = b.abs(d);
-    let kc = b.constant(k);
-    let kd = b.sub(kc, ad);
-    let zero = b.constant(0.0);
-    let h = b.max(kd, zero);
-    let h2 = b.square(h);
-    let corr = b.mul_c(h2, 0.25 / k);
-    let m = b.min(x, y);
-    b.sub(m, corr)
 }
 
 /// The names and key origins of a surface table's `params`.

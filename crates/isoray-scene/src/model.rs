@@ -664,6 +664,8 @@ pub struct Object {
     /// algebra (implicit and parametric surfaces): changing one recompiles
     /// the object. Every other input the shape reads stays live.
     pub bound_inputs: Vec<u32>,
+    /// The compiled shape apart from the scene (shared with the object cache).
+    pub(crate) fragment: std::sync::Arc<crate::compile::Fragment>,
 }
 
 /// An object's placement: its shape d₀ is rotated about x, then y, then z
@@ -687,7 +689,11 @@ pub struct Transform {
 impl Transform {
     /// The nodes of R⁻¹(p − c)/s for the point X, Y, Z of `b`.
     pub fn lower_point(&self, b: &mut isoray_shape::Builder) -> [isoray_shape::Node; 3] {
-        let k = self.inputs;
+        self.lower_point_at(b, self.inputs)
+    }
+
+    /// [`Transform::lower_point`] reading the seven inputs from `k` on.
+    pub(crate) fn lower_point_at(&self, b: &mut isoray_shape::Builder, k: u32) -> [isoray_shape::Node; 3] {
         let input = |b: &mut isoray_shape::Builder, j: u32| b.input(k + j);
         let (x, y, z) = (b.x(), b.y(), b.z());
         let (cx, cy, cz) = (input(b, 0), input(b, 1), input(b, 2));
@@ -720,7 +726,16 @@ impl Transform {
 
     /// s·d for the object's distance d at the transformed point.
     pub fn lower_distance(&self, b: &mut isoray_shape::Builder, d: isoray_shape::Node) -> isoray_shape::Node {
-        let scale = b.input(self.inputs + 6);
+        Self::lower_distance_at(b, d, self.inputs)
+    }
+
+    /// [`Transform::lower_distance`] reading the seven inputs from `k` on.
+    pub(crate) fn lower_distance_at(
+        b: &mut isoray_shape::Builder,
+        d: isoray_shape::Node,
+        k: u32,
+    ) -> isoray_shape::Node {
+        let scale = b.input(k + 6);
         b.mul(d, scale)
     }
 }
@@ -742,20 +757,10 @@ pub struct Scene {
     pub params: Vec<(String, Value)>,
     /// The whole scene's distance: the union (or smooth union) of the objects.
     pub shape: Shape,
-    /// The unsigned distance to the nearest object surface, min over objects
-    /// of |dᵢ|: what rays travelling inside objects (refraction) trace.
-    pub surfaces: Shape,
-    /// When some object is transparent, what shadow rays trace: None when
-    /// every object is opaque (shadow rays then trace `shape`).
-    pub shadow: Option<ShadowShapes>,
+    /// What renderers derive from the objects (see [`Scene::derived`]).
+    pub(crate) derived: crate::derive::Derived,
     /// What rays leaving the scene see (None: `render.background`).
     pub environment: Option<crate::env::Environment>,
-    /// Per object, its closed form when it is exactly a plane or a sphere
-    /// (recognised only when `render.blend` = 0).
-    pub analytic: Vec<Option<crate::analytic::Analytic>>,
-    /// When some object is analytic: the union of the others, which rays
-    /// outside objects march while the analytic ones are intersected.
-    pub rest: Option<Shape>,
     /// The scene's parameters and user surfaces, with their cached analyses.
     pub library: Library,
     /// Ranges declared for number parameters (for sliders), in file order.
@@ -772,6 +777,8 @@ pub struct Scene {
     /// What the scene was loaded from, to compile it again when a value
     /// that exact algebra bound changes.
     pub(crate) origin: std::sync::Arc<SceneOrigin>,
+    /// The compiled objects this scene and its recompilations share.
+    pub(crate) cache: crate::compile::ObjectCache,
 }
 
 /// The values that [`Scene::set_value`] and driven expressions change,
@@ -928,6 +935,19 @@ pub struct ParamRange {
 }
 
 impl Scene {
+    /// What renderers trace besides the objects, derived from them: the
+    /// unsigned field, the shadow fields, the closed forms and the union of
+    /// the marched objects. Kept consistent with the objects by the scene.
+    pub fn derived(&self) -> &crate::derive::Derived {
+        &self.derived
+    }
+
+    /// The object cache this scene compiles with: pass it to later loads
+    /// (with [`crate::LoadOptions::objects`]) to reuse unchanged objects.
+    pub fn object_cache(&self) -> &crate::compile::ObjectCache {
+        &self.cache
+    }
+
     /// The scene's signed distance at a point (at the current inputs).
     pub fn distance(&self, p: [f64; 3]) -> f64 {
         self.shape.eval_with(&self.inputs, p)
@@ -1093,7 +1113,7 @@ impl Scene {
         if bound {
             return self.recompile();
         }
-        if !crate::load::analytic_allowed(&self.render) {
+        if !crate::derive::analytic_allowed(&self.render) {
             return Ok(());
         }
         for (i, o) in self.objects.iter().enumerate() {
@@ -1101,17 +1121,28 @@ impl Scene {
                 continue;
             }
             let now = crate::analytic::Analytic::recognise(&o.shape, &self.inputs);
-            // A change of which objects are closed forms changes what is marched.
-            if now.is_some() != self.analytic[i].is_some() {
-                return self.recompile();
+            // A change of which objects are closed forms changes what is
+            // marched: derive again from the compiled objects.
+            if now.is_some() != self.derived.analytic[i].is_some() {
+                self.rederive();
+                return Ok(());
             }
-            self.analytic[i] = now;
+            self.derived.analytic[i] = now;
         }
         Ok(())
     }
 
+    /// Builds the scene's distance and the derived data again from the
+    /// compiled objects (nothing is compiled).
+    fn rederive(&mut self) {
+        let (shape, derived) = crate::derive::assemble(&mut self.objects, &self.materials, &self.render, &self.inputs);
+        self.shape = shape;
+        self.derived = derived;
+    }
+
     /// Compiles the scene again from its sources with the current
-    /// parameter values and time (analyses come from the cache by value).
+    /// parameter values and time: objects whose bound inputs did not change
+    /// come from the object cache, analyses from the analysis cache.
     fn recompile(&mut self) -> Result<(), crate::SceneError> {
         let mut src = self.origin.sources.clone();
         for (name, v) in &self.params {
@@ -1126,6 +1157,7 @@ impl Scene {
             time: self.time(),
             analyses: Some(self.library.analyses().clone()),
             cancel: self.library.cancel_token().cloned(),
+            objects: Some(self.cache.clone()),
         };
         let fresh = crate::load_str_with(&src.text, &src.path, &src.overrides, &opts)?;
         let origin = self.origin.clone();

@@ -184,7 +184,7 @@ fn expression_errors_point_into_the_value() {
 #[test]
 fn closed_forms_follow_parameters() {
     let mut s = scene("[params]\nr = 0.7\n[[object]]\nshape = \"sphere(p - vec3(1.0, 0.0, 0.0), r)\"\n");
-    let radius = |s: &Scene| match s.analytic[0] {
+    let radius = |s: &Scene| match s.derived().analytic[0] {
         Some(isoray_scene::analytic::Analytic::Sphere { r, .. }) => r,
         other => panic!("{other:?}"),
     };

@@ -63,11 +63,15 @@ fn placements_follow_time_and_parameters_without_recompiling() {
         "[params]\nspeed = 2.0\n[[object]]\nshape = \"sphere(p, 1.0)\"\nposition = [\"speed * t\", 0.0, \"sin(t)\"]\nscale = \"1.0 + 0.5 * t\"\n",
     );
     let tape_before = s.objects[0].shape.tape().clone();
-    assert!(is_sphere(s.analytic[0], [0.0; 3], 1.0), "{:?}", s.analytic[0]);
+    assert!(
+        is_sphere(s.derived().analytic[0], [0.0; 3], 1.0),
+        "{:?}",
+        s.derived().analytic[0]
+    );
     s.set_time(2.0).unwrap();
     assert_eq!(s.objects[0].shape.tape(), &tape_before, "same tape");
-    let Some(Analytic::Sphere { c, r }) = s.analytic[0] else {
-        panic!("{:?}", s.analytic[0])
+    let Some(Analytic::Sphere { c, r }) = s.derived().analytic[0] else {
+        panic!("{:?}", s.derived().analytic[0])
     };
     assert!(close(c[0], 4.0) && close(c[1], 0.0) && close(c[2], 2f64.sin()) && close(r, 2.0));
     assert!(close(s.distance([4.0, 0.0, 2f64.sin()]), -2.0));
@@ -90,11 +94,15 @@ fn closed_forms_follow_the_placement() {
         "[[object]]\nshape = \"plane(p, vec3(0.0, 1.0, 0.0), 0.0)\"\nrotation = [0.0, 0.0, 90.0]\nposition = [2.0, 0.0, 0.0]\n[[object]]\nshape = \"sphere(p, 0.5)\"\nposition = [0.0, 3.0, 0.0]\nscale = 2.0\n",
     );
     // The floor's normal +y turned 90° about z points to −x; it passes through x = 2.
-    let Some(Analytic::Plane { n, h }) = s.analytic[0] else {
-        panic!("{:?}", s.analytic[0])
+    let Some(Analytic::Plane { n, h }) = s.derived().analytic[0] else {
+        panic!("{:?}", s.derived().analytic[0])
     };
     assert!(close(n[0], -1.0) && close(n[1], 0.0) && close(h, 2.0), "{n:?} {h}");
-    assert!(is_sphere(s.analytic[1], [0.0, 3.0, 0.0], 1.0), "{:?}", s.analytic[1]);
+    assert!(
+        is_sphere(s.derived().analytic[1], [0.0, 3.0, 0.0], 1.0),
+        "{:?}",
+        s.derived().analytic[1]
+    );
 }
 
 #[test]

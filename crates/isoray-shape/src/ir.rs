@@ -667,6 +667,57 @@ impl Builder {
         d
     }
 
+    /// Copies the nodes that `root` of `from` depends on into this builder
+    /// and returns the copy of `root`. Inputs are renumbered by `input`
+    /// (for graphs compiled apart with placeholder inputs); lazy selects
+    /// stay lazy. The nodes were simplified when `from` built them, so the
+    /// copy is the graph this builder would have built from the same calls:
+    /// a graph compiled once and imported gives the tape compiling it here
+    /// would give.
+    pub fn import(&mut self, from: &Builder, root: Node, input: impl Fn(u32) -> u32) -> Node {
+        // The nodes root reaches, in index order (a topological order).
+        let mut reach = vec![false; root.0 as usize + 1];
+        reach[root.0 as usize] = true;
+        for i in (0..=root.0 as usize).rev() {
+            if !reach[i] {
+                continue;
+            }
+            match from.ops[i] {
+                Op::Unary(_, a) => reach[a.0 as usize] = true,
+                Op::Binary(_, a, b) => {
+                    reach[a.0 as usize] = true;
+                    reach[b.0 as usize] = true;
+                }
+                Op::Select(c, a, b) => {
+                    reach[c.0 as usize] = true;
+                    reach[a.0 as usize] = true;
+                    reach[b.0 as usize] = true;
+                }
+                Op::Const(_) | Op::X | Op::Y | Op::Z | Op::Input(_) => {}
+            }
+        }
+        let mut map: Vec<Node> = vec![Node(u32::MAX); root.0 as usize + 1];
+        for i in 0..=root.0 as usize {
+            if !reach[i] {
+                continue;
+            }
+            let m = |n: Node| map[n.0 as usize];
+            let op = match from.ops[i] {
+                Op::Input(v) => Op::Input(input(v)),
+                Op::Unary(o, a) => Op::Unary(o, m(a)),
+                Op::Binary(o, a, b) => Op::Binary(o, m(a), m(b)),
+                Op::Select(c, a, b) => Op::Select(m(c), m(a), m(b)),
+                op @ (Op::Const(_) | Op::X | Op::Y | Op::Z) => op,
+            };
+            let n = self.intern(op);
+            if from.lazy.contains(&Node(i as u32)) {
+                self.lazy.insert(n);
+            }
+            map[i] = n;
+        }
+        map[root.0 as usize]
+    }
+
     /// Extracts the nodes that `output` depends on as an evaluation tape.
     pub fn tape(&self, output: Node) -> Tape {
         Tape::extract(&self.ops, &self.lazy, output)
@@ -1197,6 +1248,66 @@ impl Tape {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A graph built apart and imported gives the tape building it in place
+    /// gives, with its inputs renumbered and its lazy selects kept.
+    #[test]
+    fn import_is_building_in_place() {
+        // Something already in the target: shared x, a constant, an input.
+        let prefix = |b: &mut Builder| {
+            let x = b.x();
+            let c = b.constant(0.5);
+            let t = b.input(0);
+            let xt = b.mul(x, t);
+            b.add(xt, c)
+        };
+        // The object: reads input `k`, with a lazy select.
+        let object = |b: &mut Builder, k: u32| {
+            let (x, y) = (b.x(), b.y());
+            let r = b.input(k);
+            let x2 = b.square(x);
+            let y2 = b.square(y);
+            let d = b.add(x2, y2);
+            let d = b.sqrt(d);
+            let _garbage = b.unary(UnOp::Sin, d);
+            let near = b.sub(d, r);
+            let far = b.add_c(near, -1.0);
+            let e = b.unary(UnOp::Cos, near);
+            let e = b.add(near, e);
+            b.lazy_select(far, near, e)
+        };
+        let mut direct = Builder::new();
+        let p = prefix(&mut direct);
+        let o = object(&mut direct, 3);
+        let out_direct = direct.min(p, o);
+
+        let mut apart = Builder::new();
+        let o_apart = object(&mut apart, 1 << 30);
+        let mut target = Builder::new();
+        let p = prefix(&mut target);
+        let o = target.import(&apart, o_apart, |v| if v >= 1 << 30 { v - (1 << 30) + 3 } else { v });
+        let out_import = target.min(p, o);
+
+        let (a, b) = (direct.tape(out_direct), target.tape(out_import));
+        assert_eq!(a.vars(), b.vars());
+        assert!(b.instrs().iter().any(|i| matches!(i, Instr::Skip { .. })));
+        let vars = [0.25, 0.0, 0.0, 0.75];
+        let mut pa = crate::eval::PointEvaluator::<f64>::new(&a);
+        let mut pb = crate::eval::PointEvaluator::<f64>::new(&b);
+        for i in 0..50 {
+            let q = [i as f64 * 0.13 - 3.0, (i as f64 * 0.7).sin() * 2.0, 0.0];
+            assert_eq!(
+                pa.eval(&vars, q[0], q[1], q[2]).to_bits(),
+                pb.eval(&vars, q[0], q[1], q[2]).to_bits()
+            );
+        }
+        // Imported into an empty builder, the tape is the same tape.
+        let mut alone = Builder::new();
+        let o_direct = object(&mut alone, 3);
+        let mut empty = Builder::new();
+        let o_copy = empty.import(&apart, o_apart, |v| if v >= 1 << 30 { v - (1 << 30) + 3 } else { v });
+        assert_eq!(alone.tape(o_direct), empty.tape(o_copy));
+    }
 
     /// A lazy select and its eager twin, over a shared subexpression.
     fn lazy_pair() -> (Tape, Tape) {

@@ -352,6 +352,26 @@ impl Library {
         (key, inputs)
     }
 
+    /// A key for everything that compiling shape text calling the functions
+    /// `called` depends on in this library besides the text itself: the
+    /// input layout (each parameter's name and type, in order) and the
+    /// content of the user surfaces it calls, directly or not. Shape text
+    /// compiled in two libraries with equal keys gives the same graph,
+    /// except for inputs that exact algebra bound (see [`Compiled::bound`]).
+    pub fn content_key(&self, called: &[String]) -> String {
+        let mut key = String::new();
+        for (n, v) in &self.params {
+            key.push_str(&format!("{n}:{};", v.ty()));
+        }
+        key.push('|');
+        for name in called {
+            if let Some(s) = self.surfaces.get(name) {
+                key.push_str(&self.content_of(s).0);
+            }
+        }
+        key
+    }
+
     /// The analysis of a surface with its default parameters.
     pub fn default_analysis(&self, name: &str) -> Option<Result<Arc<Analysis>, Diagnostic>> {
         let s = self.surfaces.get(name)?;

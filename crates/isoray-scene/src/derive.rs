@@ -1,0 +1,160 @@
+//! What renderers trace, derived from the objects: the scene's distance
+//! (their union), the unsigned distance rays inside objects march, the
+//! fields shadow rays trace past transparent objects, the closed forms of
+//! planes and spheres and the union of the other objects.
+//!
+//! Everything here is a function of the objects' compiled fragments, their
+//! materials, the render settings and the current inputs; [`assemble`] is
+//! the one place it is computed, at load and whenever the inputs change
+//! which objects are closed forms. Nothing outside this crate can set it,
+//! so it cannot drift from the objects.
+
+use isoray_shape::{Builder, Node, Shape};
+
+use crate::analytic::Analytic;
+use crate::model::{Material, Object, RenderSettings, ShadowShapes, View};
+
+/// The distance of empty space: every ray misses.
+pub(crate) const EMPTY: f64 = 1e9;
+
+/// Data the renderers derive from the objects (see the module docs).
+#[derive(Debug, Clone)]
+pub struct Derived {
+    /// The unsigned distance to the nearest object surface, min over objects
+    /// of |dᵢ|: what rays travelling inside objects (refraction) trace.
+    pub surfaces: Shape,
+    /// When some object is transparent, what shadow rays trace: None when
+    /// every object is opaque (shadow rays then trace the scene's shape).
+    pub shadow: Option<ShadowShapes>,
+    /// Per object, its closed form when it is exactly a plane or a sphere
+    /// (recognised only when [`analytic_allowed`]).
+    pub analytic: Vec<Option<Analytic>>,
+    /// When some object is analytic: the union of the others, which rays
+    /// outside objects march while the analytic ones are intersected.
+    pub rest: Option<Shape>,
+}
+
+/// Whether closed forms are used with these settings: not with a smooth
+/// union (`blend` > 0), not in the steps view, and not when turned off.
+pub fn analytic_allowed(render: &RenderSettings) -> bool {
+    render.blend == 0.0 && render.analytic && render.view != View::Steps
+}
+
+/// min(a,b) − max(k−|a−b|,0)²/(4k), or min(a, b) when k = 0.
+pub(crate) fn smooth_union(b: &mut Builder, x: Node, y: Node, k: f64) -> Node {
+    if k <= 0.0 {
+        return b.min(x, y);
+    }
+    let d = b.sub(x, y);
+    let ad = b.abs(d);
+    let kc = b.constant(k);
+    let kd = b.sub(kc, ad);
+    let zero = b.constant(0.0);
+    let h = b.max(kd, zero);
+    let h2 = b.square(h);
+    let corr = b.mul_c(h2, 0.25 / k);
+    let m = b.min(x, y);
+    b.sub(m, corr)
+}
+
+/// Builds the scene's graph from the objects' fragments: sets each
+/// object's `shape`, and returns the scene's distance (the union, or the
+/// smooth union with k = `render.blend`, folded in file order) and the
+/// derived data at the inputs `inputs`.
+pub(crate) fn assemble(
+    objects: &mut [Object],
+    materials: &[Material],
+    render: &RenderSettings,
+    inputs: &[f64],
+) -> (Shape, Derived) {
+    let mut builder = Builder::new();
+    let nodes: Vec<Node> = objects
+        .iter_mut()
+        .map(|o| {
+            let node = o.fragment.import(&mut builder, o.transform.as_ref().map(|t| t.inputs));
+            o.shape = Shape::from_tape(builder.tape(node));
+            node
+        })
+        .collect();
+    let acc = match nodes.split_first() {
+        None => builder.constant(EMPTY),
+        Some((&first, rest)) => rest
+            .iter()
+            .fold(first, |acc, &n| smooth_union(&mut builder, acc, n, render.blend)),
+    };
+    let shape = Shape::from_tape(builder.tape(acc));
+    let u = match nodes.split_first() {
+        None => builder.constant(EMPTY),
+        Some((&first, rest)) => {
+            let a0 = builder.abs(first);
+            rest.iter().fold(a0, |u, &n| {
+                let a = builder.abs(n);
+                builder.min(u, a)
+            })
+        }
+    };
+    let surfaces = Shape::from_tape(builder.tape(u));
+    // Shadows with transparent objects: opaque objects occlude (with the
+    // penumbra estimate), transparent ones transmit (traced separately).
+    let clear: Vec<bool> = objects
+        .iter()
+        .map(|o| materials[o.material].transparency > 0.0)
+        .collect();
+    let shadow = if clear.iter().any(|&c| c) {
+        let pick = |b: &mut Builder, want: bool, unsigned: bool| {
+            let mut acc: Option<Node> = None;
+            for (&n, &c) in nodes.iter().zip(&clear) {
+                if c != want {
+                    continue;
+                }
+                let n = if unsigned { b.abs(n) } else { n };
+                acc = Some(match acc {
+                    None => n,
+                    Some(a) if unsigned => b.min(a, n),
+                    Some(a) => smooth_union(b, a, n, render.blend),
+                });
+            }
+            acc.unwrap_or_else(|| b.constant(EMPTY))
+        };
+        let opaque = pick(&mut builder, false, false);
+        let clear_union = pick(&mut builder, true, false);
+        let clear_surfaces = pick(&mut builder, true, true);
+        Some(ShadowShapes {
+            opaque: Shape::from_tape(builder.tape(opaque)),
+            transparent: Shape::from_tape(builder.tape(clear_union)),
+            transparent_surfaces: Shape::from_tape(builder.tape(clear_surfaces)),
+        })
+    } else {
+        None
+    };
+    // Planes and spheres are intersected in closed form; the rest is marched.
+    let analytic: Vec<Option<Analytic>> = if analytic_allowed(render) {
+        objects.iter().map(|o| Analytic::recognise(&o.shape, inputs)).collect()
+    } else {
+        vec![None; objects.len()]
+    };
+    let rest = if analytic.iter().any(Option::is_some) {
+        let mut acc: Option<Node> = None;
+        for (&n, a) in nodes.iter().zip(&analytic) {
+            if a.is_none() {
+                acc = Some(match acc {
+                    None => n,
+                    Some(x) => builder.min(x, n),
+                });
+            }
+        }
+        let root = acc.unwrap_or_else(|| builder.constant(EMPTY));
+        Some(Shape::from_tape(builder.tape(root)))
+    } else {
+        None
+    };
+    (
+        shape,
+        Derived {
+            surfaces,
+            shadow,
+            analytic,
+            rest,
+        },
+    )
+}
