@@ -30,6 +30,8 @@ pub mod env;
 mod error;
 mod load;
 mod model;
+mod read;
+mod reader;
 mod save;
 pub mod schema;
 

@@ -1045,7 +1045,7 @@ impl Scene {
                 let at = tr.inputs as usize + k;
                 let v = value.eval_with(&next, [0.0; 3]);
                 if k == 6 {
-                    crate::load::check_scale(&self.origin.sources, i, tr, v)?;
+                    crate::read::check_scale(&self.origin.sources, i, tr, v)?;
                 }
                 if v.to_bits() != next[at].to_bits() {
                     next[at] = v;

@@ -323,7 +323,7 @@ macro_rules! settings {
             /// Reads the table's keys (absent keys take their defaults),
             /// checking each against its description; the extra fields
             /// take their defaults.
-            pub(crate) fn read(r: &mut $crate::load::Reader) -> Result<Self, $crate::SceneError> {
+            pub(crate) fn read(r: &mut $crate::reader::Reader) -> Result<Self, $crate::SceneError> {
                 let d = $name::default();
                 let keys = $keys();
                 let mut keys = keys.iter();
@@ -437,11 +437,11 @@ impl<T: Named> DocValue for T {
 
 /// Values a key can be read into.
 pub(crate) trait FromKey: Sized {
-    fn from_key(r: &mut crate::load::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError>;
+    fn from_key(r: &mut crate::reader::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError>;
 }
 
 impl FromKey for u32 {
-    fn from_key(r: &mut crate::load::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
+    fn from_key(r: &mut crate::reader::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
         let Kind::Int { lo, hi } = spec.kind else {
             unreachable!("an integer key")
         };
@@ -450,7 +450,7 @@ impl FromKey for u32 {
 }
 
 impl FromKey for f64 {
-    fn from_key(r: &mut crate::load::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
+    fn from_key(r: &mut crate::reader::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
         let Kind::Num(range) = spec.kind else {
             unreachable!("a number key")
         };
@@ -459,13 +459,13 @@ impl FromKey for f64 {
 }
 
 impl FromKey for bool {
-    fn from_key(r: &mut crate::load::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
+    fn from_key(r: &mut crate::reader::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
         r.boolean(spec.name, default)
     }
 }
 
 impl FromKey for [f64; 3] {
-    fn from_key(r: &mut crate::load::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
+    fn from_key(r: &mut crate::reader::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
         match spec.kind {
             Kind::Vector => r.vec3(spec.name, default),
             Kind::UnitColour => r.unit_color(spec.name, default),
@@ -507,7 +507,7 @@ pub trait Named: Sized + Copy + PartialEq + 'static {
 }
 
 impl<T: Named> FromKey for T {
-    fn from_key(r: &mut crate::load::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
+    fn from_key(r: &mut crate::reader::Reader, spec: &KeySpec, default: Self) -> Result<Self, crate::SceneError> {
         r.choice(spec.name, T::NAMES, default)
     }
 }
