@@ -69,6 +69,22 @@ impl Item {
     }
 }
 
+/// The value at a dotted key (`camera.fov`, `light.0.intensity`,
+/// `object.2.position.1`): tables are entered by key, arrays by index.
+pub fn find<'a>(entries: &'a [Entry], key: &str) -> Option<&'a Located> {
+    let mut parts = key.split('.');
+    let first = parts.next()?;
+    let mut at = &entries.iter().rev().find(|e| e.key == first)?.value;
+    for part in parts {
+        at = match &at.item {
+            Item::Table(es) => &es.iter().rev().find(|e| e.key == part)?.value,
+            Item::Array(items) => items.get(part.parse::<usize>().ok()?)?,
+            _ => return None,
+        };
+    }
+    Some(at)
+}
+
 fn span(r: std::ops::Range<usize>) -> Span {
     Span::new(r.start, r.end)
 }

@@ -311,7 +311,10 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         driven: b.driven,
         library: lib,
         param_ranges: b.param_ranges,
-        origin: std::sync::Arc::new(SceneOrigin { sources: src.clone() }),
+        origin: std::sync::Arc::new(SceneOrigin {
+            sources: src.clone(),
+            root: root.to_vec(),
+        }),
         cache,
     })
 }

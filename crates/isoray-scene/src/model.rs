@@ -912,6 +912,8 @@ pub struct Driven {
 #[derive(Debug)]
 pub(crate) struct SceneOrigin {
     pub(crate) sources: crate::error::Sources,
+    /// The document as loaded (overrides applied), for [`Scene::origin_of`].
+    pub(crate) root: Vec<crate::doc::Entry>,
 }
 
 /// The fields shadow rays trace in a scene with transparent objects.
@@ -940,6 +942,15 @@ impl Scene {
     /// the marched objects. Kept consistent with the objects by the scene.
     pub fn derived(&self) -> &crate::derive::Derived {
         &self.derived
+    }
+
+    /// Where the value of a dotted key was written (`light.0.intensity`,
+    /// `object.2.shape`, `params.k`): a span of the scene file, an
+    /// override, or [`crate::doc::Origin::Implicit`] for a default. None
+    /// when the scene has no such key. For editors that show a value's
+    /// source or an error next to its field.
+    pub fn origin_of(&self, key: &str) -> Option<crate::doc::Origin> {
+        crate::doc::find(&self.origin.root, key).map(|v| v.origin)
     }
 
     /// The object cache this scene compiles with: pass it to later loads

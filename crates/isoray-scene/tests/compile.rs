@@ -126,3 +126,28 @@ fn closed_forms_change_without_recompiling() {
     assert_eq!(s.derived().analytic[0].is_some(), fresh.derived().analytic[0].is_some());
     assert_eq!(bits(&s), bits(&fresh));
 }
+
+#[test]
+fn every_value_knows_where_it_was_written() {
+    let text = "[camera]\nfov = 35.0\n[[light]]\nintensity = 2.0\n[[object]]\nshape = \"sphere(p, 1.0)\"\nposition = [1.0, \"t\", 0.0]\n";
+    let s = load_str_with(
+        text,
+        "t.toml",
+        &["camera.position=[0.0, 0.0, 6.0]".to_string()],
+        &LoadOptions::default(),
+    )
+    .unwrap();
+    let at = |key: &str| match s.origin_of(key) {
+        Some(isoray_scene::doc::Origin::File(span)) => &text[span.start..span.end],
+        other => panic!("{key}: {other:?}"),
+    };
+    assert_eq!(at("camera.fov"), "35.0");
+    assert_eq!(at("light.0.intensity"), "2.0");
+    assert_eq!(at("object.0.shape"), "\"sphere(p, 1.0)\"");
+    assert_eq!(at("object.0.position.1"), "\"t\"");
+    assert_eq!(
+        s.origin_of("camera.position"),
+        Some(isoray_scene::doc::Origin::Override(0))
+    );
+    assert_eq!(s.origin_of("light.3.intensity"), None);
+}
