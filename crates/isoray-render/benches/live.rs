@@ -13,6 +13,11 @@
 //! * `set parameter + 64×64 tile`: the same, then the final pass of one
 //!   64×64 region (setting up the workers included).
 //!
+//! * `edit one object: reload without a cache` / `… with the object cache`:
+//!   a structural edit (the text of one of the six objects changes, a new
+//!   value each time), loaded again from the text cold, and with the
+//!   object cache of the earlier loads (only the edited object compiles).
+//!
 //! `cargo bench -p isoray-render --bench live`
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -82,6 +87,30 @@ fn bench(c: &mut Criterion) {
             render_region(&scene, tile, Pass::Final, &opts, &NoSink).expect("not cancelled")
         })
     });
+    // A structural edit: object 2 (the prism) gets a new size each time.
+    let mut n = 0u32;
+    let mut edited = move || {
+        n = n.wrapping_add(1);
+        let mut o = vec![format!(
+            "object.2.shape=tri_prism(p - vec3(-0.9, 0.45, 0.7), 0.45, {:?})",
+            0.9 + 1e-6 * n as f64
+        )];
+        o.extend(OVERRIDES.map(String::from));
+        o
+    };
+    g.bench_function("edit one object: reload without a cache", |b| {
+        b.iter(|| isoray_scene::load_str(&text, "showcase.toml", &edited()).expect("loads"))
+    });
+    let cache = isoray_scene::ObjectCache::new();
+    let opts = isoray_scene::LoadOptions {
+        objects: Some(cache.clone()),
+        ..Default::default()
+    };
+    g.bench_function("edit one object: reload with the object cache", |b| {
+        b.iter(|| isoray_scene::load_str_with(&text, "showcase.toml", &edited(), &opts).expect("loads"))
+    });
+    let stats = cache.stats();
+    assert!(stats.reused >= 5 * stats.compiled.saturating_sub(6), "{stats:?}");
     g.finish();
 }
 

@@ -13,7 +13,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use isoray_shape::{Builder, Diagnostic, Library, Node};
+use isoray_shape::{Builder, Diagnostic, Library, Node, Shape};
 
 /// Placeholder inputs of a fragment's placement: the seven inputs of
 /// [`crate::Transform`] are `FRAGMENT_INPUTS + k` until the fragment is
@@ -33,6 +33,9 @@ pub(crate) struct Fragment {
     bound_bits: Vec<u64>,
     /// The functions the shape text calls, in order of first call.
     pub(crate) called: Vec<String>,
+    /// The object's own tape, once extracted, for the first input of its
+    /// placement it was extracted with.
+    shape: Mutex<Option<(Option<u32>, Shape)>>,
 }
 
 impl Fragment {
@@ -43,6 +46,21 @@ impl Fragment {
             (true, Some(k)) => v - FRAGMENT_INPUTS + k,
             _ => v,
         })
+    }
+
+    /// The object's shape with its placement at inputs `first`: made by
+    /// `extract` the first time, then kept (a tape depends only on the
+    /// graph it is extracted from, and an imported fragment is that graph).
+    pub(crate) fn shape(&self, first: Option<u32>, extract: impl FnOnce() -> Shape) -> Shape {
+        let mut slot = self.shape.lock().unwrap_or_else(|e| e.into_inner());
+        match &*slot {
+            Some((at, shape)) if *at == first => shape.clone(),
+            _ => {
+                let shape = extract();
+                *slot = Some((first, shape.clone()));
+                shape
+            }
+        }
     }
 }
 
@@ -60,6 +78,8 @@ pub struct CacheStats {
 #[derive(Debug, Default)]
 struct Inner {
     map: HashMap<String, Vec<Arc<Fragment>>>,
+    /// The functions each shape text calls.
+    called: HashMap<String, Vec<String>>,
     stats: CacheStats,
 }
 
@@ -102,6 +122,21 @@ impl ObjectCache {
         self.len() == 0
     }
 
+    /// The functions `text` calls, if the cache has seen it.
+    pub(crate) fn called(&self, text: &str) -> Option<Vec<String>> {
+        self.0.lock().ok()?.called.get(text).cloned()
+    }
+
+    /// Remembers the functions `text` calls.
+    pub(crate) fn remember_called(&self, text: &str, called: Vec<String>) {
+        if let Ok(mut m) = self.0.lock() {
+            if m.called.len() >= Self::CAPACITY {
+                m.called.clear();
+            }
+            m.called.insert(text.to_string(), called);
+        }
+    }
+
     /// The fragment for `key`, compiled by `compile` unless the cache has
     /// one whose bound inputs have the values `inputs` gives them now.
     /// Errors are not cached.
@@ -134,6 +169,7 @@ impl ObjectCache {
             node,
             bound,
             called,
+            shape: Mutex::new(None),
         });
         if let Ok(mut m) = self.0.lock() {
             if m.map.len() >= Self::CAPACITY {

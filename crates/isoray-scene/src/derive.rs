@@ -71,8 +71,9 @@ pub(crate) fn assemble(
     let nodes: Vec<Node> = objects
         .iter_mut()
         .map(|o| {
-            let node = o.fragment.import(&mut builder, o.transform.as_ref().map(|t| t.inputs));
-            o.shape = Shape::from_tape(builder.tape(node));
+            let first = o.transform.as_ref().map(|t| t.inputs);
+            let node = o.fragment.import(&mut builder, first);
+            o.shape = o.fragment.shape(first, || Shape::from_tape(builder.tape(node)));
             node
         })
         .collect();

@@ -268,7 +268,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         Some(v) => {
             let mut r = Reader::new(src, v, "render")?;
             let s = RenderSettings::read(&mut r)?;
-            r.finish_keys(&render_keys())?;
+            r.finish_keys(render_keys())?;
             s
         }
         None => RenderSettings::default(),

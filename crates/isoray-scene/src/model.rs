@@ -328,42 +328,45 @@ pub(crate) fn unit(v: Vec3) -> Vec3 {
 
 /// Every key of a `[[light]]` table: its kind and placement, then
 /// [`light_value_keys`].
-pub fn light_keys() -> Vec<KeySpec> {
-    let mut keys = vec![
-        key(
-            "kind",
-            Kind::Choice(vec!["directional", "point", "sphere", "rect"]),
-            "\"directional\"",
-            "`\"directional\"` (at infinity), `\"point\"`, `\"sphere\"` or `\"rect\"` (area lights)",
-        ),
-        key(
-            "direction",
-            vector(),
-            &DEFAULT_LIGHT_DIRECTION.doc_text(),
-            "directional lights only: direction **towards** the light, normalised on load; must not be zero",
-        ),
-        key_without_default(
-            "position",
-            vector(),
-            "required for point and area lights",
-            "where the light is (the centre of an area light)",
-        ),
-        key("radius", num(Range::POSITIVE), "0.5", "sphere lights: the radius"),
-        key_without_default(
-            "u",
-            vector(),
-            "required for rect lights",
-            "rect lights: one edge; the light is position + a·u + b·v for a, b in [−½, ½], emitting on both sides",
-        ),
-        key_without_default(
-            "v",
-            vector(),
-            "required for rect lights",
-            "rect lights: the other edge, not parallel to `u`",
-        ),
-    ];
-    keys.extend(light_value_keys());
-    keys
+pub fn light_keys() -> &'static [KeySpec] {
+    static KEYS: std::sync::LazyLock<Vec<KeySpec>> = std::sync::LazyLock::new(|| {
+        let mut keys = vec![
+            key(
+                "kind",
+                Kind::Choice(vec!["directional", "point", "sphere", "rect"]),
+                "\"directional\"",
+                "`\"directional\"` (at infinity), `\"point\"`, `\"sphere\"` or `\"rect\"` (area lights)",
+            ),
+            key(
+                "direction",
+                vector(),
+                &DEFAULT_LIGHT_DIRECTION.doc_text(),
+                "directional lights only: direction **towards** the light, normalised on load; must not be zero",
+            ),
+            key_without_default(
+                "position",
+                vector(),
+                "required for point and area lights",
+                "where the light is (the centre of an area light)",
+            ),
+            key("radius", num(Range::POSITIVE), "0.5", "sphere lights: the radius"),
+            key_without_default(
+                "u",
+                vector(),
+                "required for rect lights",
+                "rect lights: one edge; the light is position + a·u + b·v for a, b in [−½, ½], emitting on both sides",
+            ),
+            key_without_default(
+                "v",
+                vector(),
+                "required for rect lights",
+                "rect lights: the other edge, not parallel to `u`",
+            ),
+        ];
+        keys.extend(light_value_keys().iter().cloned());
+        keys
+    });
+    &KEYS
 }
 
 /// The specular model of a material.
@@ -446,35 +449,38 @@ settings! {
 
 /// Every key of a `[material.NAME]` table: [`material_value_keys`], then
 /// the Fresnel and checker keys.
-pub fn material_keys() -> Vec<KeySpec> {
-    let mut keys = material_value_keys();
-    keys.extend([
-        key(
-            "fresnel",
-            boolean(),
-            "true",
-            "weight reflection against refraction by the Fresnel reflectance",
-        ),
-        key(
-            "fresnel_model",
-            Kind::Choice(vec!["schlick", "exact"]),
-            "\"schlick\"",
-            "`\"schlick\"`: R₀ + (1 − R₀)(1 − cos θ)⁵; `\"exact\"`: the Fresnel equations, unpolarised",
-        ),
-        key_without_default(
-            "checker",
-            Kind::Str,
-            "none",
-            "a 3D checker: where ⌊x/s⌋ + ⌊y/s⌋ + ⌊z/s⌋ is odd, the surface takes the named material instead (its shading; reflection and refraction stay this material's)",
-        ),
-        key(
-            "checker_size",
-            num(Range::POSITIVE),
-            "1.0",
-            "the checker's cell size s (only with `checker`)",
-        ),
-    ]);
-    keys
+pub fn material_keys() -> &'static [KeySpec] {
+    static KEYS: std::sync::LazyLock<Vec<KeySpec>> = std::sync::LazyLock::new(|| {
+        let mut keys = material_value_keys().to_vec();
+        keys.extend([
+            key(
+                "fresnel",
+                boolean(),
+                "true",
+                "weight reflection against refraction by the Fresnel reflectance",
+            ),
+            key(
+                "fresnel_model",
+                Kind::Choice(vec!["schlick", "exact"]),
+                "\"schlick\"",
+                "`\"schlick\"`: R₀ + (1 − R₀)(1 − cos θ)⁵; `\"exact\"`: the Fresnel equations, unpolarised",
+            ),
+            key_without_default(
+                "checker",
+                Kind::Str,
+                "none",
+                "a 3D checker: where ⌊x/s⌋ + ⌊y/s⌋ + ⌊z/s⌋ is odd, the surface takes the named material instead (its shading; reflection and refraction stay this material's)",
+            ),
+            key(
+                "checker_size",
+                num(Range::POSITIVE),
+                "1.0",
+                "the checker's cell size s (only with `checker`)",
+            ),
+        ]);
+        keys
+    });
+    &KEYS
 }
 
 /// How reflection and refraction are weighted at a surface.
@@ -521,120 +527,129 @@ const LIPSCHITZ: Range = range(
 );
 
 /// Every key of an `[[object]]` table.
-pub fn object_keys() -> Vec<KeySpec> {
-    vec![
-        key_without_default("shape", Kind::Str, "required", "shape text giving a `float` distance"),
-        key("material", Kind::Str, "\"default\"", "the name of a `[material.NAME]`"),
-        key_without_default("name", Kind::Str, "none", "a label, for your own reference"),
-        key(
-            "position",
-            vector(),
-            "[0.0, 0.0, 0.0]",
-            "where the object's origin is placed",
-        ),
-        key(
-            "rotation",
-            vector(),
-            "[0.0, 0.0, 0.0]",
-            "degrees: the object is turned about x, then y, then z, in world axes (right-handed, counter-clockwise seen from the positive axis)",
-        ),
-        key(
-            "scale",
-            num(Range::POSITIVE),
-            "1.0",
-            "uniform scale; distances stay exact: d(p) = s·d₀(p/s)",
-        ),
-    ]
+pub fn object_keys() -> &'static [KeySpec] {
+    static KEYS: std::sync::LazyLock<Vec<KeySpec>> = std::sync::LazyLock::new(|| {
+        vec![
+            key_without_default("shape", Kind::Str, "required", "shape text giving a `float` distance"),
+            key("material", Kind::Str, "\"default\"", "the name of a `[material.NAME]`"),
+            key_without_default("name", Kind::Str, "none", "a label, for your own reference"),
+            key(
+                "position",
+                vector(),
+                "[0.0, 0.0, 0.0]",
+                "where the object's origin is placed",
+            ),
+            key(
+                "rotation",
+                vector(),
+                "[0.0, 0.0, 0.0]",
+                "degrees: the object is turned about x, then y, then z, in world axes (right-handed, counter-clockwise seen from the positive axis)",
+            ),
+            key(
+                "scale",
+                num(Range::POSITIVE),
+                "1.0",
+                "uniform scale; distances stay exact: d(p) = s·d₀(p/s)",
+            ),
+        ]
+    });
+    &KEYS
 }
 
 /// Every key of a `[surface.NAME]` table.
-pub fn surface_keys() -> Vec<KeySpec> {
-    vec![
-        key_without_default(
-            "params",
-            Kind::Text("inline table"),
-            "none",
-            "parameter names with default values (number, 2 or 3 numbers, or `{ default = x, range = [min, max] }`); the default fixes each parameter's type",
-        ),
-        key_without_default(
-            "sdf",
-            Kind::Str,
-            "one of `sdf`, `implicit`, `parametric`",
-            "the body: shape text whose `p` is the point argument",
-        ),
-        key_without_default(
-            "implicit",
-            Kind::Str,
-            "one of the three",
-            "an equation f = 0 in `x`, `y`, `z` (also `p`), the parameters and the built-ins",
-        ),
-        key_without_default(
-            "parametric",
-            Kind::Text("inline table `{ x, y, z }`"),
-            "one of the three",
-            "the coordinates as expressions in `s`, `t`, the parameters and the built-ins; rational ones are implicitized",
-        ),
-        key_without_default(
-            "domain",
-            Kind::Text("inline table `{ s = [min, max], t = [min, max] }`"),
-            "`[-1.0, 1.0]` each",
-            "parametric only: the parameter domain (numerical check, `image_only`, tessellation)",
-        ),
-        key(
-            "image_only",
-            boolean(),
-            "false",
-            "parametric only: keep only points with a real preimage in the domain",
-        ),
-        key(
-            "bound",
-            Kind::Choice(vec!["auto", "taylor", "lipschitz", "first-order"]),
-            "\"auto\"",
-            "implicit and parametric: the distance bound traced (Taylor-root bound for polynomials, Lipschitz bound over a ball otherwise)",
-        ),
-        key(
-            "lipschitz_factor",
-            num(LIPSCHITZ),
-            "1.0",
-            "implicit and parametric: the traced distance is divided by it",
-        ),
-        key_without_default(
-            "material",
-            Kind::Str,
-            "none",
-            "the material of objects that call this surface and name no material",
-        ),
-    ]
+pub fn surface_keys() -> &'static [KeySpec] {
+    static KEYS: std::sync::LazyLock<Vec<KeySpec>> = std::sync::LazyLock::new(|| {
+        vec![
+            key_without_default(
+                "params",
+                Kind::Text("inline table"),
+                "none",
+                "parameter names with default values (number, 2 or 3 numbers, or `{ default = x, range = [min, max] }`); the default fixes each parameter's type",
+            ),
+            key_without_default(
+                "sdf",
+                Kind::Str,
+                "one of `sdf`, `implicit`, `parametric`",
+                "the body: shape text whose `p` is the point argument",
+            ),
+            key_without_default(
+                "implicit",
+                Kind::Str,
+                "one of the three",
+                "an equation f = 0 in `x`, `y`, `z` (also `p`), the parameters and the built-ins",
+            ),
+            key_without_default(
+                "parametric",
+                Kind::Text("inline table `{ x, y, z }`"),
+                "one of the three",
+                "the coordinates as expressions in `s`, `t`, the parameters and the built-ins; rational ones are implicitized",
+            ),
+            key_without_default(
+                "domain",
+                Kind::Text("inline table `{ s = [min, max], t = [min, max] }`"),
+                "`[-1.0, 1.0]` each",
+                "parametric only: the parameter domain (numerical check, `image_only`, tessellation)",
+            ),
+            key(
+                "image_only",
+                boolean(),
+                "false",
+                "parametric only: keep only points with a real preimage in the domain",
+            ),
+            key(
+                "bound",
+                Kind::Choice(vec!["auto", "taylor", "lipschitz", "first-order"]),
+                "\"auto\"",
+                "implicit and parametric: the distance bound traced (Taylor-root bound for polynomials, Lipschitz bound over a ball otherwise)",
+            ),
+            key(
+                "lipschitz_factor",
+                num(LIPSCHITZ),
+                "1.0",
+                "implicit and parametric: the traced distance is divided by it",
+            ),
+            key_without_default(
+                "material",
+                Kind::Str,
+                "none",
+                "the material of objects that call this surface and name no material",
+            ),
+        ]
+    });
+    &KEYS
 }
 
 /// Every key of the `[environment]` table.
-pub fn environment_keys() -> Vec<KeySpec> {
-    vec![
-        key_without_default(
-            "image",
-            Kind::Str,
-            "one of `image`, `cube`, `gradient`",
-            "an equirectangular map: a Radiance `.hdr`, OpenEXR `.exr` (linear) or 8-bit `.png` (sRGB, converted to linear), relative to the scene file",
-        ),
-        key_without_default(
-            "cube",
-            Kind::Text("inline table `{ px, nx, py, ny, pz, nz }`"),
-            "one of `image`, `cube`, `gradient`",
-            "six square faces of the same size, named by the axis each faces (OpenGL cube-map layout)",
-        ),
-        key_without_default(
-            "gradient",
-            Kind::Text("inline table `{ zenith, horizon, nadir }`"),
-            "one of `image`, `cube`, `gradient`",
-            "a sky: `horizon` (default `[0.85, 0.88, 0.93]`) at the horizon blending linearly with the height of the direction to `zenith` (default `[0.35, 0.5, 0.8]`) straight up and `nadir` (default `[0.3, 0.3, 0.32]`) straight down; `gradient = {}` takes all three defaults",
-        ),
-        key("rotation", num(ANGLE), "0.0", "turn about +y, degrees (right-handed)"),
-        key("intensity", num(Range::NON_NEGATIVE), "1.0", "multiplies the map"),
-    ]
+pub fn environment_keys() -> &'static [KeySpec] {
+    static KEYS: std::sync::LazyLock<Vec<KeySpec>> = std::sync::LazyLock::new(|| {
+        vec![
+            key_without_default(
+                "image",
+                Kind::Str,
+                "one of `image`, `cube`, `gradient`",
+                "an equirectangular map: a Radiance `.hdr`, OpenEXR `.exr` (linear) or 8-bit `.png` (sRGB, converted to linear), relative to the scene file",
+            ),
+            key_without_default(
+                "cube",
+                Kind::Text("inline table `{ px, nx, py, ny, pz, nz }`"),
+                "one of `image`, `cube`, `gradient`",
+                "six square faces of the same size, named by the axis each faces (OpenGL cube-map layout)",
+            ),
+            key_without_default(
+                "gradient",
+                Kind::Text("inline table `{ zenith, horizon, nadir }`"),
+                "one of `image`, `cube`, `gradient`",
+                "a sky: `horizon` (default `[0.85, 0.88, 0.93]`) at the horizon blending linearly with the height of the direction to `zenith` (default `[0.35, 0.5, 0.8]`) straight up and `nadir` (default `[0.3, 0.3, 0.32]`) straight down; `gradient = {}` takes all three defaults",
+            ),
+            key("rotation", num(ANGLE), "0.0", "turn about +y, degrees (right-handed)"),
+            key("intensity", num(Range::NON_NEGATIVE), "1.0", "multiplies the map"),
+        ]
+    });
+    &KEYS
 }
 
 /// The documented tables: the heading of each in `docs/SCENE.md` and its keys.
-pub fn key_tables() -> Vec<(&'static str, Vec<KeySpec>)> {
+pub fn key_tables() -> Vec<(&'static str, &'static [KeySpec])> {
     vec![
         ("### `[camera]`", camera_keys()),
         ("### `[environment]`", environment_keys()),
@@ -865,7 +880,7 @@ impl Values {
                 };
                 if field == "checker_size" {
                     let keys = material_keys();
-                    let size = crate::schema::spec(&keys, field)
+                    let size = crate::schema::spec(keys, field)
                         .check_numbers(value)
                         .map_err(|what| err(&what))?[0];
                     let Some(checker) = &mut m.checker else {

@@ -112,7 +112,7 @@ impl<'a> Build<'a> {
         let driven = &mut self.driven;
         let camera_table = match table {
             Some(v) => Some(
-                resolve_exprs(src, lib, v, "camera", &camera_keys(), snippets, driven)
+                resolve_exprs(src, lib, v, "camera", camera_keys(), snippets, driven)
                     .map_err(|e| e.into_scene(snippets, &shape_error))?,
             ),
             None => None,
@@ -126,7 +126,7 @@ impl<'a> Build<'a> {
                     .or(r.get("position"))
                     .map(|l| l.origin)
                     .unwrap_or(v.origin);
-                r.finish_keys(&camera_keys())?;
+                r.finish_keys(camera_keys())?;
                 if let Err(problem) = camera.check() {
                     let (message, label) = match problem {
                         CameraProblem::NoDirection => (
@@ -175,12 +175,12 @@ impl<'a> Build<'a> {
             };
             for (i, lv) in items.into_iter().enumerate() {
                 let ctx = format!("light.{i}");
-                let resolved = resolve_exprs(src, lib, lv, &ctx, &light_keys(), snippets, driven)
+                let resolved = resolve_exprs(src, lib, lv, &ctx, light_keys(), snippets, driven)
                     .map_err(|e| e.into_scene(snippets, &shape_error))?;
                 let lv = &resolved;
                 let mut r = Reader::new(src, lv, &ctx)?;
                 let keys = light_keys();
-                let kind_name = r.choice_key(spec(&keys, "kind"))?;
+                let kind_name = r.choice_key(spec(keys, "kind"))?;
                 let need = |r: &mut Reader, key: &str, what: &str| -> Result<Vec3> {
                     r.vec3_opt(key)?.ok_or_else(|| {
                         src.error(
@@ -193,7 +193,7 @@ impl<'a> Build<'a> {
                 };
                 let kind = match kind_name {
                     "directional" => {
-                        let dir = r.vec3("direction", spec(&keys, "direction").default_vec3())?;
+                        let dir = r.vec3("direction", spec(keys, "direction").default_vec3())?;
                         if norm(dir) < 1e-12 {
                             let o = r.get("direction").map(|l| l.origin).unwrap_or(lv.origin);
                             return Err(src.error(
@@ -212,7 +212,7 @@ impl<'a> Build<'a> {
                     },
                     "sphere" => {
                         let position = need(&mut r, "position", "sphere")?;
-                        let radius = r.num_key(spec(&keys, "radius"))?;
+                        let radius = r.num_key(spec(keys, "radius"))?;
                         LightKind::Sphere { position, radius }
                     }
                     _ => {
@@ -235,7 +235,7 @@ impl<'a> Build<'a> {
                     kind,
                     ..Light::read(&mut r)?
                 };
-                r.finish_keys(&keys)?;
+                r.finish_keys(keys)?;
                 lights.push(light);
             }
         }
@@ -264,16 +264,16 @@ impl<'a> Build<'a> {
             };
             for e in entries {
                 let ctx = format!("material.{}", e.key);
-                let resolved = resolve_exprs(src, lib, &e.value, &ctx, &material_keys(), snippets, driven)
+                let resolved = resolve_exprs(src, lib, &e.value, &ctx, material_keys(), snippets, driven)
                     .map_err(|e| e.into_scene(snippets, &shape_error))?;
                 let mut r = Reader::new(src, &resolved, &ctx)?;
                 let keys = material_keys();
                 let m = Material {
                     name: e.key.clone(),
-                    fresnel: fresnel_setting(&mut r, &keys)?,
+                    fresnel: fresnel_setting(&mut r, keys)?,
                     ..Material::read(&mut r)?
                 };
-                let checker_size = r.num_key(spec(&keys, "checker_size"))?;
+                let checker_size = r.num_key(spec(keys, "checker_size"))?;
                 if let Some((other, loc)) = r.string("checker")? {
                     pending_checkers.push((e.key.clone(), other.to_string(), loc.clone(), checker_size));
                 } else if let Some(v) = r.get("checker_size") {
@@ -284,7 +284,7 @@ impl<'a> Build<'a> {
                         &["add checker = \"OTHER_MATERIAL\"".into()],
                     ));
                 }
-                r.finish_keys(&keys)?;
+                r.finish_keys(keys)?;
                 if let Some(slot) = materials.iter_mut().find(|x| x.name == m.name) {
                     *slot = m;
                 } else {
@@ -374,7 +374,7 @@ impl<'a> Build<'a> {
                 if let Some(pv) = parametric {
                     let coords = parametric_coords(src, pv, &ctx)?;
                     let domain = parametric_domain(&mut r, &ctx)?;
-                    r.finish_keys(&surface_keys())?;
+                    r.finish_keys(surface_keys())?;
                     let mut texts = Vec::new();
                     for (text, loc) in coords {
                         let Item::Str(_, map) = &loc.item else { unreachable!() };
@@ -408,7 +408,7 @@ impl<'a> Build<'a> {
                         ))
                     }
                 };
-                r.finish_keys(&surface_keys())?;
+                r.finish_keys(surface_keys())?;
                 let Item::Str(_, map) = &loc.item else { unreachable!() };
                 let id = snippets.len();
                 snippets.push((loc, map));
@@ -491,7 +491,7 @@ impl<'a> Build<'a> {
                     for key in TRANSFORM_KEYS {
                         placement.push((key, r.get(key)));
                     }
-                    r.finish_keys(&object_keys())?;
+                    r.finish_keys(object_keys())?;
                     let transform = if placement.iter().any(|(_, v)| v.is_some()) {
                         let mut values: Vec<Shape> = Vec::with_capacity(7);
                         for (key, v) in &placement {
@@ -518,11 +518,26 @@ impl<'a> Build<'a> {
                     let Item::Str(_, map) = &loc.item else { unreachable!() };
                     let id = snippets.len();
                     snippets.push((loc, map));
-                    let program = isoray_shape::syntax::parse(text, id).map_err(|d| shape_error(snippets, d))?;
-                    let called = program.functions_called();
+                    // The functions the text calls (remembered per text: an
+                    // object taken from the cache is not even parsed).
+                    let mut program = None;
+                    let called = match cache.called(text) {
+                        Some(c) => c,
+                        None => {
+                            let p = isoray_shape::syntax::parse(text, id).map_err(|d| shape_error(snippets, d))?;
+                            let c = p.functions_called();
+                            cache.remember_called(text, c.clone());
+                            program = Some(p);
+                            c
+                        }
+                    };
                     let key = crate::compile::object_key(lib, text, transform.is_some(), &called);
                     let fragment = cache
                         .get_or_compile(key, &lib.input_values(), || {
+                            let program = match program.take() {
+                                Some(p) => p,
+                                None => isoray_shape::syntax::parse(text, id)?,
+                            };
                             let mut b = Builder::new();
                             let p = match &transform {
                                 Some(tr) => tr.lower_point_at(&mut b, crate::compile::FRAGMENT_INPUTS),
@@ -835,9 +850,9 @@ pub(crate) fn environment(src: &Sources, v: &Located, scene_name: &str) -> Resul
         };
         g.finish(&["zenith", "horizon", "nadir"])?;
         let keys = environment_keys();
-        let rotation = r.num_key(spec(&keys, "rotation"))?;
-        let intensity = r.num_key(spec(&keys, "intensity"))?;
-        r.finish_keys(&environment_keys())?;
+        let rotation = r.num_key(spec(keys, "rotation"))?;
+        let intensity = r.num_key(spec(keys, "intensity"))?;
+        r.finish_keys(environment_keys())?;
         return Ok(Environment {
             map,
             rotation,
@@ -894,9 +909,9 @@ pub(crate) fn environment(src: &Sources, v: &Located, scene_name: &str) -> Resul
         }
     };
     let keys = environment_keys();
-    let rotation = r.num_key(spec(&keys, "rotation"))?;
-    let intensity = r.num_key(spec(&keys, "intensity"))?;
-    r.finish_keys(&environment_keys())?;
+    let rotation = r.num_key(spec(keys, "rotation"))?;
+    let intensity = r.num_key(spec(keys, "intensity"))?;
+    r.finish_keys(environment_keys())?;
     Ok(Environment {
         map,
         rotation,
@@ -935,13 +950,13 @@ fn material_index(src: &Sources, materials: &[Material], m: &str, loc: &Located,
 /// `bound`, `lipschitz_factor` and `image_only` of a surface.
 fn surface_options(r: &mut Reader) -> Result<SurfaceOptions> {
     let keys = surface_keys();
-    let bound = match r.choice_key(spec(&keys, "bound"))? {
+    let bound = match r.choice_key(spec(keys, "bound"))? {
         "taylor" => BoundMethod::Taylor,
         "lipschitz" => BoundMethod::Lipschitz,
         "first-order" => BoundMethod::FirstOrder,
         _ => BoundMethod::Auto,
     };
-    let lipschitz_factor = r.num_key(spec(&keys, "lipschitz_factor"))?;
+    let lipschitz_factor = r.num_key(spec(keys, "lipschitz_factor"))?;
     Ok(SurfaceOptions {
         bound,
         lipschitz_factor,

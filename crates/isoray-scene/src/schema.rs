@@ -304,19 +304,22 @@ macro_rules! settings {
         }
 
         /// The keys of this table, in the order the docs list them.
-        pub fn $keys() -> Vec<$crate::schema::KeySpec> {
-            let d = $name::default();
-            vec![
-                $(
-                    $crate::schema::KeySpec {
-                        name: stringify!($field),
-                        kind: $kind,
-                        default: $crate::schema::DocValue::doc_text(&d.$field),
-                        absent: "",
-                        doc: $doc,
-                    },
-                )*
-            ]
+        pub fn $keys() -> &'static [$crate::schema::KeySpec] {
+            static KEYS: std::sync::LazyLock<Vec<$crate::schema::KeySpec>> = std::sync::LazyLock::new(|| {
+                let d = $name::default();
+                vec![
+                    $(
+                        $crate::schema::KeySpec {
+                            name: stringify!($field),
+                            kind: $kind,
+                            default: $crate::schema::DocValue::doc_text(&d.$field),
+                            absent: "",
+                            doc: $doc,
+                        },
+                    )*
+                ]
+            });
+            &KEYS
         }
 
         impl $name {
