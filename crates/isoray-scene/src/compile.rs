@@ -33,6 +33,9 @@ pub(crate) struct Fragment {
     bound_bits: Vec<u64>,
     /// The functions the shape text calls, in order of first call.
     pub(crate) called: Vec<String>,
+    /// Values that must stay positive as the inputs change, with what each
+    /// is (see [`isoray_shape::Compiled::guards`]).
+    pub(crate) guards: Vec<(Shape, String)>,
     /// The object's own tape, once extracted, for the first input of its
     /// placement it was extracted with.
     shape: Mutex<Option<(Option<u32>, Shape)>>,
@@ -62,6 +65,20 @@ impl Fragment {
             }
         }
     }
+}
+
+/// What compiling an object gives, for [`ObjectCache::get_or_compile`].
+pub(crate) struct Compiled {
+    /// The graph.
+    pub(crate) graph: Builder,
+    /// The object's distance in it.
+    pub(crate) node: Node,
+    /// Inputs exact algebra bound, sorted.
+    pub(crate) bound: Vec<u32>,
+    /// The functions the text calls.
+    pub(crate) called: Vec<String>,
+    /// Values that must stay positive.
+    pub(crate) guards: Vec<(Shape, String)>,
 }
 
 /// How many objects a cache compiled and how many it reused.
@@ -144,7 +161,7 @@ impl ObjectCache {
         &self,
         key: String,
         inputs: &[f64],
-        compile: impl FnOnce() -> Result<(Builder, Node, Vec<u32>, Vec<String>), Diagnostic>,
+        compile: impl FnOnce() -> Result<Compiled, Diagnostic>,
     ) -> Result<Arc<Fragment>, Diagnostic> {
         let bits = |bound: &[u32]| -> Vec<u64> {
             bound
@@ -162,13 +179,20 @@ impl ObjectCache {
                 return Ok(f);
             }
         }
-        let (graph, node, bound, called) = compile()?;
+        let Compiled {
+            graph,
+            node,
+            bound,
+            called,
+            guards,
+        } = compile()?;
         let fragment = Arc::new(Fragment {
             bound_bits: bits(&bound),
             graph,
             node,
             bound,
             called,
+            guards,
             shape: Mutex::new(None),
         });
         if let Ok(mut m) = self.0.lock() {

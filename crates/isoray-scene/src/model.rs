@@ -1066,6 +1066,16 @@ impl Scene {
         set(&mut next);
         let mut changed = vars.to_vec();
         for (i, o) in self.objects.iter().enumerate() {
+            for (guard, what) in &o.fragment.guards {
+                let v = guard.eval_with(&next, [0.0; 3]);
+                if !(v > 0.0 && v.is_finite()) {
+                    return Err(crate::SceneError::usage(format!(
+                        "`object.{i}.shape`: {what} must be positive, found {v} (at t = {})",
+                        next.first().copied().unwrap_or(0.0)
+                    ))
+                    .with_key(format!("object.{i}.shape")));
+                }
+            }
             let Some(tr) = &o.transform else { continue };
             for (k, value) in tr.values.iter().enumerate() {
                 let at = tr.inputs as usize + k;

@@ -550,7 +550,18 @@ impl<'a> Build<'a> {
                                 }
                                 None => compiled.node,
                             };
-                            Ok((b, node, compiled.bound, called))
+                            let guards = compiled
+                                .guards
+                                .iter()
+                                .map(|(n, what)| (Shape::from_tape(b.tape(*n)), what.clone()))
+                                .collect();
+                            Ok(crate::compile::Compiled {
+                                graph: b,
+                                node,
+                                bound: compiled.bound,
+                                called,
+                                guards,
+                            })
                         })
                         .map_err(|d| shape_error(snippets, d))?;
                     // Without a material of its own, an object takes the default

@@ -248,3 +248,31 @@ shape = "sphere(p, 1.0)"
     s.set_value("material.m.checker_size", &[2.0]).unwrap();
     assert_eq!(s.materials[1].checker.map(|c| c.1), Some(2.0));
 }
+
+/// A period of `repeat` that reads a parameter or the time must stay
+/// positive when they change, as it must at load: an error, not NaN.
+#[test]
+fn live_periods_stay_positive() {
+    let mut s =
+        scene("[params]\ns = 2.0\n[[object]]\nshape = \"sphere(repeat(p, vec3(s, 1.0 + 0.5 * sin(t), 3.0)), 0.25)\"\n");
+    let before = s.distance([0.3, 0.2, 0.1]);
+    let e = s.set_param("s", Value::Float(0.0)).unwrap_err();
+    assert!(
+        e.message.contains("the period of `repeat` must be positive, found 0"),
+        "{}",
+        e.message
+    );
+    assert_eq!(e.key.as_deref(), Some("object.0.shape"));
+    assert_eq!(s.distance([0.3, 0.2, 0.1]), before, "an error changes nothing");
+    s.set_param("s", Value::Float(1.0)).unwrap();
+    assert!(s.set_time(-std::f64::consts::FRAC_PI_2).is_ok(), "1 − 0.5 > 0");
+    assert!(s.distance([0.3, 0.2, 0.1]).is_finite());
+    // Bad at load: a load error.
+    let e = isoray_scene::load_str(
+        "[params]\ns = -1.0\n[[object]]\nshape = \"sphere(repeat(p, vec3(s)), 0.25)\"\n",
+        "t.toml",
+        &[],
+    )
+    .unwrap_err();
+    assert!(e.message.contains("must be positive"), "{}", e.message);
+}

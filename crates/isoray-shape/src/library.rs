@@ -254,7 +254,9 @@ pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Opt
 
 /// The period of `repeat` and `repeat_limited` must be positive: a zero
 /// period would give NaN everywhere. Checked where the period is known at
-/// load time: constants, and values of the parameters and time as they are.
+/// load time: constants, and values of the parameters and time as they are;
+/// a period that reads inputs is also kept as a guard to check again when
+/// they change.
 fn check_period(l: &mut Lowerer, name: &str, args: &[Arg]) -> Option<Diagnostic> {
     if !matches!(name, "repeat" | "repeat_limited") {
         return None;
@@ -263,6 +265,9 @@ fn check_period(l: &mut Lowerer, name: &str, args: &[Arg]) -> Option<Diagnostic>
     let vars = l.lib_input_values();
     for &n in period.v.comps() {
         let Some(v) = l.b.uniform_value(n, &vars) else { continue };
+        if l.b.const_value(n).is_none() {
+            l.guards.push((n, format!("the period of `{name}`")));
+        }
         if !(v > 0.0 && v.is_finite()) {
             let what = if l.b.const_value(n).is_some() {
                 String::new()

@@ -575,6 +575,7 @@ impl Library {
         Ok(Compiled {
             node: v.s(),
             bound: l.bound,
+            guards: l.guards,
         })
     }
 }
@@ -611,6 +612,12 @@ pub struct Compiled {
     /// Inputs whose values an exact analysis (implicit or parametric
     /// surface) bound at compile time, sorted; empty when every input stays live.
     pub bound: Vec<u32>,
+    /// Values that must stay positive whatever the inputs become (the
+    /// periods of `repeat` written with parameters or `t`), with what each
+    /// is: nodes of the builder that read inputs and no coordinate. The
+    /// compile checked them at the current inputs; whoever changes the
+    /// inputs checks them again.
+    pub guards: Vec<(Node, String)>,
 }
 
 /// Lowers one snippet; holds the scope and the call stack of user primitives.
@@ -623,6 +630,8 @@ pub(crate) struct Lowerer<'a> {
     depth: usize,
     /// Inputs whose current values exact algebra bound as constants.
     bound: Vec<u32>,
+    /// Uniform values that must stay positive (see [`Compiled::guards`]).
+    pub(crate) guards: Vec<(Node, String)>,
     /// When set, inputs lower as these constant values (for exact algebra).
     bind: Option<Vec<f64>>,
 }
@@ -649,6 +658,7 @@ impl<'a> Lowerer<'a> {
             calls: Vec::new(),
             depth: 0,
             bound: Vec::new(),
+            guards: Vec::new(),
             bind: None,
         }
     }
