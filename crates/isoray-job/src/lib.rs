@@ -4,7 +4,8 @@
 //! surface analysis, Gröbner bases and implicitization, meshing, the ray
 //! tracer and the raster pipeline: one [`CancelToken`] to ask work to stop,
 //! one [`Cancelled`] error to say it did, and one [`Progress`] trait to
-//! report how far it got.
+//! report how far it got; and [`file`], the one way results are written
+//! (whole or not at all).
 //!
 //! ```
 //! use isoray_job::{CancelToken, Cancelled, Counter, Progress};
@@ -30,6 +31,8 @@
 //! Work checks its token at points that come at least every few
 //! milliseconds (per tile, per batch of rays, per reduction step), so a
 //! cancellation takes effect well within 0.2 s.
+
+pub mod file;
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;

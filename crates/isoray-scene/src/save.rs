@@ -8,7 +8,6 @@
 //! assert_eq!(out, "[render]\nwidth = 640   # small\n\n[[object]]\nshape = \"box(p, vec3(1.0))\"\n");
 //! ```
 
-use std::io::Write;
 use std::path::Path;
 
 use toml_edit::{DocumentMut, InlineTable, Item, Table, Value};
@@ -64,38 +63,18 @@ pub fn set_file(path: &Path, edits: &[String], out: Option<&Path>) -> Result<Set
     })
 }
 
-/// Writes `bytes` to a temporary file beside `path`, flushes it to disk and
-/// renames it over `path`: readers see the old file or the new one, never a
-/// part, and a failure leaves the old file as it was.
+/// Writes `bytes` to `path` atomically: readers see the old file or the
+/// new one, never a part, and a failure leaves the old file as it was
+/// (see [`isoray_job::file`]).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    replace_atomically(path, |tmp| {
-        let mut f = std::fs::File::create(tmp)?;
-        f.write_all(bytes)
-    })
+    isoray_job::file::write_atomic(path, bytes)
 }
 
 /// Lets `write` create a temporary file beside `path`, flushes it to disk
 /// and renames it over `path`; on any failure the temporary file is removed
-/// and the old file is left as it was. The one atomic-write mechanism of
-/// scene files and rendered images.
+/// and the old file is left as it was (see [`isoray_job::file`]).
 pub fn replace_atomically(path: &Path, write: impl FnOnce(&Path) -> std::io::Result<()>) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name"))?;
-    let tmp = dir.join(format!(".{}.tmp-{}", file_name.to_string_lossy(), std::process::id()));
-    let result = (|| {
-        write(&tmp)?;
-        std::fs::File::open(&tmp)?.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    isoray_job::file::replace_atomically(path, write)
 }
 
 /// Applies one `KEY=VALUE` edit to the document.

@@ -23,7 +23,6 @@ use std::fmt;
 use std::fs;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::mesh::{Mesh, MeshMaterial};
 
@@ -188,7 +187,7 @@ pub fn read(path: &Path) -> Result<Mesh, MeshIoError> {
 
 /// Writes `mesh` to `path` in the format its extension names, atomically:
 /// the data goes to a temporary file in the same directory
-/// (`.<name>.tmp-<pid>-<n>`), which is flushed to disk and then renamed over
+/// (`.<name>.tmp-<pid>-<n>`, see [`isoray_job::file`]), which is flushed to disk and then renamed over
 /// `path`. On any failure the temporary file is removed and an existing
 /// `path` is left untouched.
 ///
@@ -210,17 +209,14 @@ pub fn write(path: &Path, mesh: &Mesh) -> Result<(), MeshIoError> {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
+        // Both files are written before either is renamed into place.
         let obj_tmp = write_temp(path, |w| obj::write(w, mesh, Some(&mtl_name)))?;
-        let mtl_tmp = write_temp(&mtl_path, |w| obj::write_mtl(w, mesh)).inspect_err(|_| {
-            let _ = fs::remove_file(&obj_tmp);
-        })?;
-        commit(&mtl_tmp, &mtl_path).inspect_err(|_| {
-            let _ = fs::remove_file(&obj_tmp);
-        })?;
-        commit(&obj_tmp, path)
+        let mtl_tmp = write_temp(&mtl_path, |w| obj::write_mtl(w, mesh))?;
+        commit(mtl_tmp, &mtl_path)?;
+        commit(obj_tmp, path)
     } else {
         let tmp = write_temp(path, |w| encode(format, w, mesh))?;
-        commit(&tmp, path)
+        commit(tmp, path)
     }
 }
 
@@ -246,49 +242,23 @@ fn encode(format: Format, w: &mut dyn Write, mesh: &Mesh) -> Result<(), Problem>
     }
 }
 
-/// Writes a temporary file beside `target` with `fill`, flushed and synced;
-/// returns its path. On failure the temporary file is removed.
-fn write_temp(target: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<(), Problem>) -> Result<PathBuf, MeshIoError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let dir = match target.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let Some(name) = target.file_name() else {
-        return Err(MeshIoError::Io {
-            path: target.to_path_buf(),
-            source: io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"),
-        });
-    };
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let tmp = dir.join(format!(".{}.tmp-{}-{n}", name.to_string_lossy(), std::process::id()));
-    let file = fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&tmp)
-        .map_err(|e| Problem::Io(e).at(target))?;
-    let result = (|| -> Result<(), Problem> {
-        let mut w = BufWriter::new(file);
-        fill(&mut w)?;
-        let file = w.into_inner().map_err(|e| Problem::Io(e.into_error()))?;
-        file.sync_all()?;
-        Ok(())
-    })();
-    match result {
-        Ok(()) => Ok(tmp),
-        Err(p) => {
-            let _ = fs::remove_file(&tmp);
-            Err(p.at(target))
-        }
-    }
+/// Fills a temporary file beside `target` with `fill` (see
+/// [`isoray_job::file::TempFile`]): removed on failure, or if dropped
+/// before it is committed.
+fn write_temp(
+    target: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> Result<(), Problem>,
+) -> Result<isoray_job::file::TempFile, MeshIoError> {
+    let (tmp, file) = isoray_job::file::TempFile::beside(target).map_err(|e| Problem::Io(e).at(target))?;
+    let mut w = BufWriter::new(file);
+    fill(&mut w).map_err(|p| p.at(target))?;
+    w.flush().map_err(|e| Problem::Io(e).at(target))?;
+    Ok(tmp)
 }
 
-/// Renames `tmp` over `target`; on failure removes `tmp`.
-fn commit(tmp: &Path, target: &Path) -> Result<(), MeshIoError> {
-    fs::rename(tmp, target).map_err(|e| {
-        let _ = fs::remove_file(tmp);
-        Problem::Io(e).at(target)
-    })
+/// Renames `tmp` over `target` (flushed to disk first).
+fn commit(tmp: isoray_job::file::TempFile, target: &Path) -> Result<(), MeshIoError> {
+    tmp.commit().map_err(|e| Problem::Io(e).at(target))
 }
 
 /// Checks the mesh's invariants; the message says what is wrong.
