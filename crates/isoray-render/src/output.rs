@@ -21,7 +21,7 @@ pub enum OutputError {
     },
 }
 
-/// Writes through [`isoray_scene::replace_atomically`], naming the target in errors.
+/// Writes through [`isoray_job::file::replace_atomically`], naming the target in errors.
 fn atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> std::result::Result<(), String>,
@@ -33,7 +33,7 @@ fn atomically(
     if path.is_dir() {
         return Err(fail("it is a directory".into()));
     }
-    isoray_scene::replace_atomically(path, |tmp| write(tmp).map_err(std::io::Error::other))
+    isoray_job::file::replace_atomically(path, |tmp| write(tmp).map_err(std::io::Error::other))
         .map_err(|e| fail(e.to_string()))
 }
 
@@ -109,7 +109,7 @@ mod tests {
         let leftovers: Vec<_> = std::fs::read_dir(&dir)
             .unwrap()
             .filter_map(|e| e.ok())
-            .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+            .filter(|e| e.file_name().to_string_lossy().contains(".tmp"))
             .collect();
         assert!(leftovers.is_empty());
         std::fs::remove_dir_all(&dir).unwrap();
