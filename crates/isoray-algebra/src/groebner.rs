@@ -10,8 +10,11 @@
 //! * The output is the reduced basis: minimal, interreduced, normalised (monic
 //!   over a field), sorted by increasing leading monomial.
 
+use std::borrow::Cow;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use isoray_job::Progress;
 use num_traits::One;
 
 use crate::coeff::{from_zint, to_zint, Coeff, Domain, Rat, ZInt};
@@ -41,7 +44,7 @@ pub struct Budget {
 }
 
 /// Options of [`groebner`].
-#[derive(Debug, Clone, Default)]
+#[derive(Clone, Default)]
 pub struct GroebnerOptions {
     /// Pair selection.
     pub strategy: Strategy,
@@ -49,6 +52,72 @@ pub struct GroebnerOptions {
     pub budget: Budget,
     /// How bases over Q are computed.
     pub method: Method,
+    /// Told how far the computation got (none by default):
+    ///
+    /// * each Buchberger run is a stage `groebner`: `done` is the S-pairs
+    ///   reduced, `total` those and the S-pairs waiting (it grows as new
+    ///   basis elements bring pairs);
+    /// * then a stage `interreduction`: elements reduced of the basis size;
+    /// * the multi-modular method adds, per prime, `replay` (steps of the
+    ///   first prime's trace replayed, of its length) and `verification`
+    ///   (pairs and inputs checked, of those to check), and prefixes the
+    ///   stage names by `modular, prime K: `.
+    ///
+    /// `done` never decreases within a stage and equals `total` when a stage
+    /// completes (a verification that fails, and the fraction-free attempt
+    /// that [`Method::Auto`] abandons for the multi-modular method, stop
+    /// short).
+    pub progress: Option<Arc<dyn Progress + Send>>,
+}
+
+impl std::fmt::Debug for GroebnerOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GroebnerOptions")
+            .field("strategy", &self.strategy)
+            .field("budget", &self.budget)
+            .field("method", &self.method)
+            .field("progress", &self.progress.is_some())
+            .finish()
+    }
+}
+
+/// A [`Progress`] that forwards to another with every stage name prefixed.
+struct Prefixed {
+    prefix: String,
+    inner: Arc<dyn Progress + Send>,
+}
+
+impl Progress for Prefixed {
+    fn update(&self, done: u64, total: u64) {
+        self.inner.update(done, total);
+    }
+    fn stage(&self, name: &str) {
+        self.inner.stage(&format!("{}{name}", self.prefix));
+    }
+}
+
+/// `progress` with every stage name prefixed by `prefix()` (`None` stays `None`).
+pub(crate) fn prefixed_progress(
+    progress: &Option<Arc<dyn Progress + Send>>,
+    prefix: impl FnOnce() -> String,
+) -> Option<Arc<dyn Progress + Send>> {
+    progress.as_ref().map(|inner| {
+        Arc::new(Prefixed {
+            prefix: prefix(),
+            inner: inner.clone(),
+        }) as Arc<dyn Progress + Send>
+    })
+}
+
+/// `opts` whose progress stages are prefixed by `prefix()`; borrowed unchanged without progress.
+pub(crate) fn with_stage_prefix(opts: &GroebnerOptions, prefix: impl FnOnce() -> String) -> Cow<'_, GroebnerOptions> {
+    match &opts.progress {
+        None => Cow::Borrowed(opts),
+        Some(_) => Cow::Owned(GroebnerOptions {
+            progress: prefixed_progress(&opts.progress, prefix),
+            ..opts.clone()
+        }),
+    }
 }
 
 /// How [`groebner`] computes a basis over Q.
@@ -284,6 +353,7 @@ fn run<D: Domain>(
 ) -> Result<(Vec<Poly<D>>, Stats, Trace), GroebnerError> {
     let mut st = State::new(ring, opts);
     let mut trace = Trace::default();
+    st.stage("groebner");
     for p in prepared_inputs(ring, polys) {
         let h = st.reduce_full(&p, None)?;
         if !h.is_zero() {
@@ -293,6 +363,7 @@ fn run<D: Domain>(
             st.update(h, sugar);
         }
     }
+    st.report_pairs(0, 0);
     while let Some(pair) = st.select() {
         st.check()?;
         let s = st.spoly(&pair);
@@ -300,6 +371,7 @@ fn run<D: Domain>(
         let h = st.reduce_full(&s, None)?;
         if h.is_zero() {
             st.stats.zero_reductions += 1;
+            st.report_pairs(st.stats.pairs_reduced, 0);
             continue;
         }
         let h = h.normalized();
@@ -311,6 +383,7 @@ fn run<D: Domain>(
         }
         trace.steps.push((pair.i, pair.j, h.lm().expect("nonzero").clone()));
         st.update(h, pair.sugar);
+        st.report_pairs(st.stats.pairs_reduced, 0);
     }
     let basis = st.interreduce()?;
     st.stats.basis_size = basis.len();
@@ -345,7 +418,10 @@ pub fn groebner_replay<D: Domain>(
     if k != trace.inputs.len() {
         return Ok(None);
     }
-    for (i, j, lm) in &trace.steps {
+    st.stage("replay");
+    let steps = trace.steps.len() as u64;
+    st.report(0, steps);
+    for (n, (i, j, lm)) in trace.steps.iter().enumerate() {
         st.check()?;
         let (Some(a), Some(b)) = (st.polys.get(*i), st.polys.get(*j)) else {
             return Ok(None);
@@ -367,6 +443,7 @@ pub fn groebner_replay<D: Domain>(
             return Ok(None);
         }
         st.insert(h);
+        st.report(n as u64 + 1, steps);
     }
     let basis = st.interreduce()?;
     st.stats.basis_size = basis.len();
@@ -453,6 +530,27 @@ impl<'a, D: Domain> State<'a, D> {
 
     fn lm(&self, k: usize) -> &Monomial {
         self.polys[k].poly.lm().expect("basis elements are nonzero")
+    }
+
+    /// Tells the options' progress (if any) that stage `name` begins.
+    fn stage(&self, name: &str) {
+        if let Some(p) = &self.opts.progress {
+            p.stage(name);
+        }
+    }
+
+    /// Tells the options' progress (if any) `done` of `total`.
+    fn report(&self, done: u64, total: u64) {
+        if let Some(p) = &self.opts.progress {
+            p.update(done, total);
+        }
+    }
+
+    /// Reports `done` pairs of `done` + the pairs waiting + `more` (units still to come).
+    fn report_pairs(&self, done: u64, more: u64) {
+        if let Some(p) = &self.opts.progress {
+            p.update(done, done + self.pairs.len() as u64 + more);
+        }
     }
 
     /// Chooses and removes the next pair.
@@ -629,10 +727,13 @@ impl<'a, D: Domain> State<'a, D> {
         let ring = self.ring;
         let ids = self.basis.clone();
         let mut out = Vec::with_capacity(ids.len());
+        self.stage("interreduction");
+        self.report(0, ids.len() as u64);
         for &k in &ids {
             let f = self.polys[k].poly.clone();
             let r = self.reduce_full(&f, Some(k))?;
             out.push((k, r.normalized()));
+            self.report(out.len() as u64, ids.len() as u64);
         }
         for (k, p) in &out {
             self.polys[*k].poly = p.clone();
@@ -662,17 +763,25 @@ pub fn check_groebner_basis<D: Domain>(
     if st.basis.len() != basis.iter().filter(|g| !g.is_zero()).count() {
         return Ok(false); // not minimal: some leading monomial divides another
     }
+    // Progress: the pairs, then the inputs.
+    st.stage("verification");
+    let n_inputs = inputs.len() as u64;
+    let mut done = 0;
+    st.report_pairs(done, n_inputs);
     while let Some(pair) = st.select() {
         st.check()?;
         let s = st.spoly(&pair);
         if !st.reduce_full(&s, None)?.is_zero() {
             return Ok(false);
         }
+        done += 1;
+        st.report_pairs(done, n_inputs);
     }
-    for f in inputs {
+    for (k, f) in inputs.iter().enumerate() {
         if !st.reduce_full(&f.reorder(ring), None)?.is_zero() {
             return Ok(false);
         }
+        st.report(done + k as u64 + 1, done + n_inputs);
     }
     Ok(true)
 }
@@ -764,6 +873,91 @@ mod tests {
         assert_eq!(
             gb(&["x", "y"], MonomialOrder::DegRevLex, &["x*y - 1", "x", "y^2"]),
             ["1"]
+        );
+    }
+
+    #[test]
+    fn progress_counts_pairs_and_changes_nothing() {
+        use crate::testing::Recorder;
+        // Large coefficients need several primes (replays of the first prime's trace).
+        let big = {
+            let ring = Ring::new(&["x", "y", "z"], MonomialOrder::DegRevLex);
+            let polys = [
+                "12345678901*x^2 + 98765432101*y*z - 1",
+                "x*y - 31415926535*z^2 + 2",
+                "x + 27182818284*y + z - 3",
+            ]
+            .iter()
+            .map(|s| parse_poly(&ring, s).unwrap())
+            .collect::<Vec<_>>();
+            (ring, polys)
+        };
+        for (k, (ring, polys)) in [crate::systems::katsura(4), crate::systems::cyclic(4), big]
+            .into_iter()
+            .enumerate()
+        {
+            for method in [Method::FractionFree, Method::Modular, Method::Auto] {
+                let plain = GroebnerOptions {
+                    method,
+                    ..Default::default()
+                };
+                let expected = groebner(&ring, &polys, &plain).unwrap();
+                let recorder = Arc::new(Recorder::default());
+                let watched = GroebnerOptions {
+                    progress: Some(recorder.clone()),
+                    ..plain.clone()
+                };
+                let r = groebner(&ring, &polys, &watched).unwrap();
+                assert_eq!(r.basis, expected.basis, "{method:?}");
+                assert_eq!(
+                    Stats {
+                        time: Duration::ZERO,
+                        ..r.stats
+                    },
+                    Stats {
+                        time: Duration::ZERO,
+                        ..expected.stats
+                    },
+                    "{method:?}"
+                );
+                // Only a verification that fails (an unlucky lift) and the
+                // fraction-free attempt that Auto abandons stop short.
+                let abandoned = |name: &str| method == Method::Auto && name == "groebner";
+                let stages = recorder.check(|name| !(name.ends_with("verification") || abandoned(name)));
+                let names: Vec<&str> = stages.iter().map(|(n, _)| n.as_str()).collect();
+                match method {
+                    Method::FractionFree => {
+                        assert_eq!(names, ["groebner", "interreduction"]);
+                        // Every pair reduced was counted.
+                        assert_eq!(stages[0].1.last().unwrap().0, r.stats.pairs_reduced);
+                    }
+                    Method::Modular => {
+                        assert_eq!(names[0], "modular, prime 1: groebner");
+                        assert!(names.iter().all(|n| n.starts_with("modular, prime ")), "{names:?}");
+                        if k == 2 {
+                            assert!(names.iter().any(|n| n.ends_with(": replay")), "{names:?}");
+                        }
+                        let last = stages.last().unwrap();
+                        assert!(last.0.ends_with(": verification"), "{names:?}");
+                        let (d, t) = *last.1.last().unwrap();
+                        assert_eq!(d, t, "the accepted verification checked everything");
+                    }
+                    Method::Auto => assert_eq!(names[0], "groebner"),
+                }
+            }
+        }
+        // The job crate's Counter ends at done == total.
+        let (ring, polys) = crate::systems::katsura(3);
+        let counter = Arc::new(isoray_job::Counter::default());
+        let opts = GroebnerOptions {
+            method: Method::FractionFree,
+            progress: Some(counter.clone()),
+            ..Default::default()
+        };
+        let r = groebner(&ring, &polys, &opts).unwrap();
+        assert_eq!(
+            (counter.done(), counter.total()),
+            (r.basis.len() as u64, r.basis.len() as u64)
         );
     }
 

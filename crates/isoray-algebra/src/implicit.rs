@@ -7,7 +7,7 @@
 //! {x, y, z}), never plain lex.
 
 use crate::coeff::{Int, Rat};
-use crate::groebner::{groebner, GroebnerError, GroebnerOptions, Stats};
+use crate::groebner::{groebner, with_stage_prefix, GroebnerError, GroebnerOptions, Stats};
 use crate::monomial::MonomialOrder;
 use crate::parse::{parse_rational, to_primitive_integer, ParseError, RatFunc};
 use crate::poly::{Poly, Ring};
@@ -161,6 +161,9 @@ pub fn parse_parametrization(coords: &[&str], params: &[&str]) -> Result<Vec<Rat
 }
 
 /// Implicitizes a rational parametrization by Gröbner elimination.
+///
+/// `opts.progress` hears the Gröbner computation's stages (see
+/// [`GroebnerOptions::progress`]) prefixed by `elimination: `.
 pub fn implicitize_groebner(
     coords: &[&str],
     params: &[&str],
@@ -211,7 +214,7 @@ pub fn implicitize_groebner(
         );
         gens.push(one.sub(&ring, &lift(&prod).mul(&ring, &w)));
     }
-    let result = groebner(&ring, &gens, opts)?;
+    let result = groebner(&ring, &gens, &with_stage_prefix(opts, || "elimination: ".to_string()))?;
     let elim: Vec<&Poly<Rat>> = result.basis.iter().filter(|p| (0..k).all(|i| !p.uses_var(i))).collect();
     let out_ring = Ring::new(names, MonomialOrder::DegRevLex);
     let map_out = |p: &Poly<Rat>| {
@@ -253,6 +256,25 @@ mod tests {
         implicitize_groebner(&[x, y, z], &["s", "t"], &GroebnerOptions::default())
             .unwrap_or_else(|e| panic!("{e}"))
             .display()
+    }
+
+    #[test]
+    fn elimination_reports_its_groebner_stages() {
+        let recorder = std::sync::Arc::new(crate::testing::Recorder::default());
+        let opts = GroebnerOptions {
+            progress: Some(recorder.clone()),
+            ..Default::default()
+        };
+        let a = implicitize_groebner(
+            &["2s/(s^2+t^2+1)", "2t/(s^2+t^2+1)", "(s^2+t^2-1)/(s^2+t^2+1)"],
+            &["s", "t"],
+            &opts,
+        )
+        .unwrap();
+        assert_eq!(a.display(), "x^2 + y^2 + z^2 - 1");
+        let stages = recorder.check(|name| !name.ends_with("verification"));
+        assert!(stages.iter().all(|(n, _)| n.starts_with("elimination: ")), "{stages:?}");
+        assert!(stages.iter().any(|(n, _)| n.ends_with("interreduction")), "{stages:?}");
     }
 
     #[test]

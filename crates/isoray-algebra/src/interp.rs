@@ -9,6 +9,9 @@
 //! (s, t) of known bidegree, and it is zero because it vanishes on a grid one
 //! larger than that bidegree in each parameter.
 
+use std::sync::Arc;
+
+use isoray_job::{CancelToken, Progress};
 use num_integer::Integer;
 use num_traits::{One, ToPrimitive, Zero};
 
@@ -20,14 +23,22 @@ use crate::parse::{to_primitive_integer, RatFunc};
 use crate::poly::{Poly, Ring};
 
 /// Options of [`implicitize_interpolation`].
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct InterpolationOptions {
     /// Largest implicit degree tried (degrees 1, 2, … are tried in turn).
     pub max_degree: u32,
     /// Wall-clock limit.
     pub time: Option<std::time::Duration>,
-    /// Cancelled to stop (checked once per prime).
-    pub interrupt: Option<isoray_job::CancelToken>,
+    /// Cancelled to stop (checked once per prime, and while verifying).
+    pub interrupt: Option<CancelToken>,
+    /// Told how far the computation got (none by default): per trial degree
+    /// and prime a stage `interpolation (degree D)` whose units are the
+    /// sample points (the rows of the linear system), then the columns of
+    /// its elimination; per verification over Q a stage `certificate` whose
+    /// units are the points of its grid. `done` never decreases within a
+    /// stage and equals `total` when a stage completes (a verification that
+    /// fails stops short).
+    pub progress: Option<Arc<dyn Progress + Send>>,
 }
 
 impl Default for InterpolationOptions {
@@ -36,7 +47,19 @@ impl Default for InterpolationOptions {
             max_degree: 24,
             time: None,
             interrupt: None,
+            progress: None,
         }
+    }
+}
+
+impl std::fmt::Debug for InterpolationOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("InterpolationOptions")
+            .field("max_degree", &self.max_degree)
+            .field("time", &self.time)
+            .field("interrupt", &self.interrupt)
+            .field("progress", &self.progress.is_some())
+            .finish()
     }
 }
 
@@ -125,7 +148,14 @@ impl Barrett {
 /// The nullspace of a K×N matrix mod p (p < 2^31, row-major, entries < p)
 /// when it is one-dimensional: the vector with its last nonzero entry 1.
 /// `Ok(None)` for a trivial nullspace, `Err(dim)` for a larger one.
-fn nullspace_1(mut a: Vec<u64>, k: usize, n: usize, p: u64) -> Result<Option<Vec<u64>>, usize> {
+/// `columns_done(c)` is told after the elimination of each column c + 1.
+fn nullspace_1(
+    mut a: Vec<u64>,
+    k: usize,
+    n: usize,
+    p: u64,
+    columns_done: &dyn Fn(usize),
+) -> Result<Option<Vec<u64>>, usize> {
     use rayon::prelude::*;
     let br = Barrett::new(p);
     let mut pivots: Vec<usize> = Vec::new();
@@ -135,6 +165,7 @@ fn nullspace_1(mut a: Vec<u64>, k: usize, n: usize, p: u64) -> Result<Option<Vec
             break;
         }
         let Some(r) = (row..k).find(|&r| a[r * n + col] != 0) else {
+            columns_done(col + 1);
             continue;
         };
         if r != row {
@@ -160,6 +191,7 @@ fn nullspace_1(mut a: Vec<u64>, k: usize, n: usize, p: u64) -> Result<Option<Vec
         });
         pivots.push(col);
         row += 1;
+        columns_done(col + 1);
     }
     let free: Vec<usize> = (0..n).filter(|c| pivots.binary_search(c).is_err()).collect();
     match free.len() {
@@ -209,6 +241,12 @@ pub fn implicitize_interpolation(
     let start = std::time::Instant::now();
     let funcs = parse_parametrization(coords, params)?;
     let names = coordinate_names(coords.len());
+    let progress = opts.progress.as_deref();
+    let report = |done: usize, total: usize| {
+        if let Some(p) = progress {
+            p.update(done as u64, total as u64);
+        }
+    };
     let nc = coords.len();
     let np = params.len();
     let mut seed = 0x2545F4914F6CDD1Du64;
@@ -258,6 +296,12 @@ pub fn implicitize_interpolation(
             }
             // Sample points mod p.
             let k_rows = n + 8;
+            // Progress units: the sample points, then the columns eliminated.
+            let units = k_rows + n;
+            if let Some(p) = progress {
+                p.stage(&format!("interpolation (degree {d})"));
+            }
+            report(0, units);
             let mut rows: Vec<u64> = Vec::with_capacity(k_rows * n);
             let mut got = 0;
             let mut tries = 0;
@@ -295,8 +339,13 @@ pub fn implicitize_interpolation(
                         .fold(1u64, |acc, (&k, pw)| (acc * pw[k as usize]) % p)
                 }));
                 got += 1;
+                report(got, units);
             }
-            let v = match nullspace_1(rows, got, n, p) {
+            report(k_rows, units);
+            let columns_done = |c: usize| report(k_rows + c, units);
+            let solved = nullspace_1(rows, got, n, p, &columns_done);
+            report(units, units);
+            let v = match solved {
                 Ok(None) => break, // no equation of degree d (mod p): try another degree
                 Err(_) if Some(d) == bound && acc.is_none() => break, // degree below the bound
                 Err(_) => continue, // unlucky prime or sampling: try another prime
@@ -342,7 +391,7 @@ pub fn implicitize_interpolation(
                     .collect(),
             );
             let f = to_primitive_integer(&out_ring, &fq);
-            if verify(&f, &funcs, d, np) {
+            if verify(&f, &funcs, d, np, progress, opts.interrupt.as_ref()) {
                 return Ok(Implicit {
                     ring: out_ring,
                     poly: f,
@@ -367,8 +416,17 @@ type IntTerms = Vec<(Vec<u16>, ZInt)>;
 /// a polynomial of degree ≤ D_j in parameter j; it is zero iff it vanishes on a
 /// grid of D_j + 1 integer values per parameter. Coordinates are scaled to
 /// integer numerators and denominators so that the grid is evaluated in exact
-/// integer arithmetic, in parallel.
-fn verify(f: &Poly<Int>, funcs: &[RatFunc], d: u32, np: usize) -> bool {
+/// integer arithmetic, in parallel, a block of points at a time: `progress`
+/// hears a stage `certificate` (grid points checked of all of them) and a
+/// cancelled `interrupt` stops the check (false).
+fn verify(
+    f: &Poly<Int>,
+    funcs: &[RatFunc],
+    d: u32,
+    np: usize,
+    progress: Option<&(dyn Progress + Send)>,
+    interrupt: Option<&CancelToken>,
+) -> bool {
     use rayon::prelude::*;
     let deg = |p: &Poly<Rat>, j: usize| p.degree_in(j).max(0) as u64;
     let bounds: Vec<u64> = (0..np)
@@ -425,7 +483,7 @@ fn verify(f: &Poly<Int>, funcs: &[RatFunc], d: u32, np: usize) -> bool {
     };
     let d = d as usize;
     let offset = ZInt::from((bounds[0] / 2) as i64);
-    (0..total).into_par_iter().all(|mut flat| {
+    let vanishes = |mut flat: u64| {
         let mut vals = Vec::with_capacity(np);
         for b in &bounds {
             vals.push(ZInt::from((flat % (b + 1)) as i64) - &offset);
@@ -455,12 +513,77 @@ fn verify(f: &Poly<Int>, funcs: &[RatFunc], d: u32, np: usize) -> bool {
             g += t;
         }
         g == ZInt::ZERO
-    })
+    };
+    if let Some(p) = progress {
+        p.stage("certificate");
+        p.update(0, total);
+    }
+    // Blocks of points, so that progress and cancellation are heard between them.
+    const BLOCK: u64 = 1024;
+    let mut lo = 0;
+    while lo < total {
+        if interrupt.is_some_and(CancelToken::is_cancelled) {
+            return false;
+        }
+        let hi = (lo + BLOCK).min(total);
+        if !(lo..hi).into_par_iter().all(vanishes) {
+            return false;
+        }
+        lo = hi;
+        if let Some(p) = progress {
+            p.update(lo, total);
+        }
+    }
+    true
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn progress_counts_rows_columns_and_grid_points() {
+        use crate::testing::Recorder;
+        for (x, y, z) in [("s", "t", "s^3 - 3*s*t^2"), ("s/t", "s/t^2", "(s+t)/s")] {
+            let coords = [x, y, z];
+            let plain = implicitize_interpolation(&coords, &["s", "t"], &InterpolationOptions::default()).unwrap();
+            let recorder = Arc::new(Recorder::default());
+            let opts = InterpolationOptions {
+                progress: Some(recorder.clone()),
+                ..Default::default()
+            };
+            let watched = implicitize_interpolation(&coords, &["s", "t"], &opts).unwrap();
+            assert_eq!(watched.poly, plain.poly);
+            // Interpolation stages always complete; only the last certificate need (a failed one stops short).
+            let stages = recorder.check(|name| name.starts_with("interpolation"));
+            assert!(stages[0].0.starts_with("interpolation (degree "), "{stages:?}");
+            let (last, updates) = stages.last().unwrap();
+            assert_eq!(last, "certificate");
+            let (d, t) = *updates.last().unwrap();
+            assert!(
+                d == t && t > 0,
+                "the accepted certificate checked its whole grid: {d} of {t}"
+            );
+            // An interpolation stage counts n + 8 sample rows and n columns for n monomials.
+            let degree = watched.poly.degree() as usize;
+            let n = (degree + 1) * (degree + 2) * (degree + 3) / 6;
+            let name = format!("interpolation (degree {degree})");
+            let (_, ups) = stages
+                .iter()
+                .rev()
+                .find(|(s, _)| *s == name)
+                .expect("the final degree's stage");
+            assert_eq!(ups.last().unwrap().1 as usize, 2 * n + 8);
+        }
+        // The job crate's Counter.
+        let counter = Arc::new(isoray_job::Counter::default());
+        let opts = InterpolationOptions {
+            progress: Some(counter.clone()),
+            ..Default::default()
+        };
+        implicitize_interpolation(&["(1-t^2)/(1+t^2)", "2t/(1+t^2)"], &["t"], &opts).unwrap();
+        assert!(counter.total() > 0 && counter.done() == counter.total());
+    }
 
     #[test]
     fn interpolation_matches_elimination() {

@@ -31,6 +31,9 @@ pub mod poly;
 pub mod resultant;
 pub mod systems;
 
+#[cfg(test)]
+pub(crate) mod testing;
+
 pub use coeff::{Coeff, Domain, Field, Fp, Int, Rat};
 pub use groebner::{groebner, Budget, GroebnerError, GroebnerOptions, GroebnerResult, Method, Stats, Strategy};
 pub use implicit::{implicitize_groebner, Implicit, ImplicitError};

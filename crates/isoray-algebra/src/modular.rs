@@ -14,7 +14,8 @@ use num_traits::{One, Signed, Zero};
 
 use crate::coeff::{is_prime, to_zint, Fp, Int, Rat, ZInt};
 use crate::groebner::{
-    check_groebner_basis, groebner_in, groebner_replay, groebner_traced, GroebnerError, GroebnerOptions, Stats,
+    check_groebner_basis, groebner_in, groebner_replay, groebner_traced, with_stage_prefix, GroebnerError,
+    GroebnerOptions, Stats,
 };
 use crate::monomial::Monomial;
 use crate::parse::to_primitive_integer;
@@ -139,6 +140,8 @@ pub fn groebner_modular(
     let mut stats = Stats::default();
     let mut last_failed: Option<usize> = None;
     let mut trace = None;
+    let mut used = 0;
+    let outer = opts;
     for p in primes() {
         // Skip primes dividing a leading coefficient (they change the leading monomials).
         if ints
@@ -147,6 +150,9 @@ pub fn groebner_modular(
         {
             continue;
         }
+        used += 1;
+        let prefixed = with_stage_prefix(outer, || format!("modular, prime {used}: "));
+        let opts: &GroebnerOptions = &prefixed;
         let pm = Int::from(p);
         let mods: Vec<Poly<Fp>> = ints
             .iter()

@@ -10,6 +10,7 @@
 //! over the pixel.
 
 use glam::DVec3;
+use isoray_job::{CancelToken, Cancelled};
 use rayon::prelude::*;
 
 use crate::abuffer::Mask;
@@ -51,17 +52,33 @@ pub fn project(
     near: f64,
     cull: impl Fn(usize) -> Cull + Sync,
 ) -> Vec<Projected> {
+    match project_with(tris, view, eye, near, cull, None) {
+        Ok(p) => p,
+        Err(Cancelled) => unreachable!("no token, no cancellation"),
+    }
+}
+
+/// [`project`], stopping soon after `cancel` is cancelled (checked per triangle).
+pub fn project_with(
+    tris: &SceneTriangles,
+    view: &ViewTransform,
+    eye: DVec3,
+    near: f64,
+    cull: impl Fn(usize) -> Cull + Sync,
+    cancel: Option<&CancelToken>,
+) -> Result<Vec<Projected>, Cancelled> {
     let (w, h) = (view.width(), view.height());
-    (0..tris.len())
+    let projected = (0..tris.len())
         .into_par_iter()
         .flat_map_iter(|t| {
             let corners = tris.corners[t];
             let centroid = (corners[0] + corners[1] + corners[2]) / 3.0;
-            let keep = match cull(t) {
-                Cull::None => true,
-                Cull::Back => tris.two_sided[t] || tris.face[t].dot(centroid - eye) <= 0.0,
-                Cull::All => false,
-            };
+            let keep = !is_cancelled(cancel)
+                && match cull(t) {
+                    Cull::None => true,
+                    Cull::Back => tris.two_sided[t] || tris.face[t].dot(centroid - eye) <= 0.0,
+                    Cull::All => false,
+                };
             let pieces = if keep {
                 let bary = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
                 let cam: [Vertex<3>; 3] =
@@ -92,7 +109,9 @@ pub fn project(
                 })
             })
         })
-        .collect()
+        .collect();
+    check(cancel)?;
+    Ok(projected)
 }
 
 /// Splits `height` rows into bands for `threads`-way parallel drawing.
@@ -160,13 +179,45 @@ impl GPixel {
     }
 }
 
+/// True once `cancel` (if any) is cancelled: the check long loops make per
+/// triangle, pixel or texel.
+pub(crate) fn is_cancelled(cancel: Option<&CancelToken>) -> bool {
+    cancel.is_some_and(CancelToken::is_cancelled)
+}
+
+/// `Err(Cancelled)` once `cancel` (if any) is cancelled.
+pub(crate) fn check(cancel: Option<&CancelToken>) -> Result<(), Cancelled> {
+    if is_cancelled(cancel) {
+        Err(Cancelled)
+    } else {
+        Ok(())
+    }
+}
+
 /// A Z-buffer of `width`×`height` pixel centres (row-major) keeping the
 /// nearest triangle per pixel, drawn in parallel bands.
 pub fn gbuffer(projected: &[Projected], width: usize, height: usize) -> Vec<GPixel> {
+    match gbuffer_with(projected, width, height, None) {
+        Ok(buf) => buf,
+        Err(Cancelled) => unreachable!("no token, no cancellation"),
+    }
+}
+
+/// [`gbuffer`], stopping soon after `cancel` is cancelled: every band checks
+/// the token before each triangle it scan-converts.
+pub fn gbuffer_with(
+    projected: &[Projected],
+    width: usize,
+    height: usize,
+    cancel: Option<&CancelToken>,
+) -> Result<Vec<GPixel>, Cancelled> {
     let mut buf = vec![GPixel::EMPTY; width * height];
     for_each_band(projected, &mut buf, width, |rows, chunk, tris| {
         let y0 = rows.start;
         for p in tris {
+            if is_cancelled(cancel) {
+                return;
+            }
             rasterize_rows(&p.v, width, rows.clone(), |f| {
                 let px = &mut chunk[(f.y as usize - y0) * width + f.x as usize];
                 if f.depth < px.depth {
@@ -179,7 +230,8 @@ pub fn gbuffer(projected: &[Projected], width: usize, height: usize) -> Vec<GPix
             });
         }
     });
-    buf
+    check(cancel)?;
+    Ok(buf)
 }
 
 /// Perspective-correct barycentric weights of the screen triangle at screen

@@ -23,10 +23,11 @@
 //!   the scene finds nothing (the caller's background).
 
 use glam::DVec3;
+use isoray_job::{CancelToken, Cancelled};
 use rayon::prelude::*;
 
 use crate::abuffer::Mask;
-use crate::draw::{coverage_fragments, for_each_band, gbuffer, project, Cull};
+use crate::draw::{check, coverage_fragments, for_each_band, gbuffer_with, is_cancelled, project_with, Cull};
 use crate::pipeline::ViewTransform;
 use crate::triangles::SceneTriangles;
 use isoray_scene::{Camera, Projection};
@@ -220,11 +221,18 @@ struct BlockLevel {
 }
 
 impl BlockLevel {
-    fn new(size: usize, n: usize, offsets: &[u32], samples: &[MapSample]) -> Self {
+    fn new(
+        size: usize,
+        n: usize,
+        offsets: &[u32],
+        samples: &[MapSample],
+        cancel: Option<&CancelToken>,
+    ) -> Result<Self, Cancelled> {
         let nb = n.div_ceil(size);
         let mut bounds = vec![[f32::INFINITY, f32::NEG_INFINITY]; 6 * nb * nb];
         for f in 0..6 {
             for y in 0..n {
+                check(cancel)?;
                 for x in 0..n {
                     let i = (f * n + y) * n + x;
                     let b = &mut bounds[(f * nb + y / size) * nb + x / size];
@@ -235,11 +243,11 @@ impl BlockLevel {
                 }
             }
         }
-        BlockLevel {
+        Ok(BlockLevel {
             size,
             per_side: nb,
             bounds,
-        }
+        })
     }
 
     /// The union of the bounds of the blocks at the four corners of the box
@@ -291,6 +299,24 @@ impl CubeMap {
         exclude: Option<u32>,
         near: f64,
     ) -> Self {
+        match Self::build_with(tris, centre, size, kind, exclude, near, None) {
+            Ok(map) => map,
+            Err(Cancelled) => unreachable!("no token, no cancellation"),
+        }
+    }
+
+    /// [`CubeMap::build`], stopping soon after `cancel` is cancelled: it is
+    /// checked per triangle projected and drawn, per texel and per row of
+    /// texels.
+    pub fn build_with(
+        tris: &SceneTriangles,
+        centre: DVec3,
+        size: usize,
+        kind: MapKind,
+        exclude: Option<u32>,
+        near: f64,
+        cancel: Option<&CancelToken>,
+    ) -> Result<Self, Cancelled> {
         let faces = CubeFaces::new(centre, size.max(1));
         let n = faces.size;
         let cull = |t: usize| {
@@ -302,43 +328,52 @@ impl CubeMap {
                 Cull::None
             }
         };
-        let mut per_face: Vec<Vec<Vec<MapSample>>> = Vec::with_capacity(6);
+        // Per face: the number of samples of each texel (row-major) and the
+        // samples, texel after texel (a few large vectors rather than one
+        // per texel: quick to build, and to drop when cancelled).
+        let mut per_face: Vec<(Vec<u32>, Vec<MapSample>)> = Vec::with_capacity(6);
         for f in 0..6 {
             let view = &faces.views[f];
-            let projected = project(tris, view, centre, near, cull);
+            let projected = project_with(tris, view, centre, near, cull, cancel)?;
             let axis = face_axis(f);
             let corner_dirs = |x: usize, y: usize| -> [DVec3; 4] {
                 [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)]
                     .map(|(dx, dy)| DVec3::from(view.screen_to_world(x as f64 + dx, y as f64 + dy, 1.0)) - centre)
             };
-            let texels: Vec<Vec<MapSample>> = match kind {
+            let face = match kind {
                 MapKind::ZBuffer => {
-                    let g = gbuffer(&projected, n, n);
-                    g.par_iter()
+                    let g = gbuffer_with(&projected, n, n, cancel)?;
+                    let texels: Vec<Option<MapSample>> = g
+                        .par_iter()
                         .enumerate()
                         .map(|(i, px)| {
-                            if !px.is_hit() {
-                                return Vec::new();
+                            if !px.is_hit() || is_cancelled(cancel) {
+                                return None;
                             }
                             let (x, y) = (i % n, i / n);
                             let t = px.tri as usize;
                             let (zmin, zmax) = plane_depth_range(tris, t, centre, axis, &corner_dirs(x, y));
-                            vec![MapSample {
+                            Some(MapSample {
                                 tri: px.tri,
                                 z: px.depth as f32,
                                 zmin: zmin.min(px.depth) as f32,
                                 zmax: zmax.max(px.depth) as f32,
                                 mask: Mask::FULL,
                                 front: true,
-                            }]
+                            })
                         })
-                        .collect()
+                        .collect();
+                    let counts = texels.iter().map(|t| u32::from(t.is_some())).collect();
+                    (counts, texels.into_iter().flatten().collect())
                 }
                 MapKind::ABuffer => {
                     let mut rows: Vec<Vec<(u32, MapSample)>> = vec![Vec::new(); n];
                     for_each_band(&projected, &mut rows, 1, |band, chunk, tris_in| {
                         let y0 = band.start;
                         for p in tris_in {
+                            if is_cancelled(cancel) {
+                                return;
+                            }
                             let t = p.tri as usize;
                             let cen = (tris.corners[t][0] + tris.corners[t][1] + tris.corners[t][2]) / 3.0;
                             let front = tris.face[t].dot(cen - centre) < 0.0;
@@ -357,41 +392,65 @@ impl CubeMap {
                             });
                         }
                     });
-                    rows.into_par_iter()
-                        .flat_map_iter(|mut row| {
-                            row.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.z.total_cmp(&b.1.z)));
-                            let mut out: Vec<Vec<MapSample>> = vec![Vec::new(); n];
-                            for (x, s) in row {
-                                merge_into(&mut out[x as usize], s, tris);
+                    check(cancel)?;
+                    // Per row: each texel's fragments merged into its depth-sorted list.
+                    let rows: Vec<(Vec<u32>, Vec<MapSample>)> = rows
+                        .into_par_iter()
+                        .map(|mut row| {
+                            let mut counts = vec![0u32; n];
+                            let mut flat = Vec::new();
+                            if is_cancelled(cancel) {
+                                // Left empty: the map is dropped below.
+                                return (counts, flat);
                             }
-                            out
+                            row.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.z.total_cmp(&b.1.z)));
+                            let mut texel: Vec<MapSample> = Vec::new();
+                            for run in row.chunk_by(|a, b| a.0 == b.0) {
+                                texel.clear();
+                                for &(_, s) in run {
+                                    merge_into(&mut texel, s, tris);
+                                }
+                                counts[run[0].0 as usize] = texel.len() as u32;
+                                flat.extend_from_slice(&texel);
+                            }
+                            (counts, flat)
                         })
-                        .collect()
+                        .collect();
+                    let mut counts = Vec::with_capacity(n * n);
+                    let mut flat = Vec::with_capacity(rows.iter().map(|r| r.1.len()).sum());
+                    for (c, s) in rows {
+                        counts.extend(c);
+                        flat.extend(s);
+                    }
+                    (counts, flat)
                 }
             };
-            per_face.push(texels);
+            check(cancel)?;
+            per_face.push(face);
         }
         let mut offsets = Vec::with_capacity(6 * n * n + 1);
-        let mut samples = Vec::new();
+        let mut samples = Vec::with_capacity(per_face.iter().map(|f| f.1.len()).sum());
         offsets.push(0u32);
-        for face in per_face {
-            for texel in face {
-                samples.extend(texel);
-                offsets.push(samples.len() as u32);
+        for (counts, face_samples) in per_face {
+            check(cancel)?;
+            samples.extend(face_samples);
+            for c in counts {
+                let last = *offsets.last().expect("starts with 0");
+                offsets.push(last + c);
             }
         }
         let levels = BLOCKS
             .iter()
-            .map(|&b| BlockLevel::new(b, n, &offsets, &samples))
-            .collect();
-        CubeMap {
+            .map(|&b| BlockLevel::new(b, n, &offsets, &samples, cancel))
+            .collect::<Result<_, _>>()?;
+        Ok(CubeMap {
             radius: tris.radius_from(centre),
             faces,
             kind,
             offsets,
             samples,
             levels,
-        }
+        })
     }
 
     /// The samples of texel (`x`, `y`) of face `f`, nearest first.
@@ -429,6 +488,23 @@ impl CubeMap {
         t_max: f64,
         tol: &SearchTolerance,
         accept: impl Fn(u32) -> bool,
+    ) -> Option<MapHit> {
+        self.search_with(origin, dir, t_min, t_max, tol, accept, None)
+    }
+
+    /// [`CubeMap::search`] that gives up (finding nothing) soon after
+    /// `cancel` is cancelled: a walk across a whole face can take
+    /// milliseconds, so work that searches many rays stops within one.
+    #[allow(clippy::too_many_arguments)]
+    pub fn search_with(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t_min: f64,
+        t_max: f64,
+        tol: &SearchTolerance,
+        accept: impl Fn(u32) -> bool,
+        cancel: Option<&CancelToken>,
     ) -> Option<MapHit> {
         let c = self.faces.centre;
         let a = origin - c;
@@ -553,7 +629,12 @@ impl CubeMap {
         let axis0 = face_axis(cur.face);
         let mut w_lo = start.dot(axis0);
         let mut w_hi = w_lo;
+        let mut steps = 0u32;
         loop {
+            steps = steps.wrapping_add(1);
+            if steps % 16 == 0 && is_cancelled(cancel) {
+                return None;
+            }
             let last = phi >= phi_end;
             let phi_now = phi.min(phi_end);
             let x = point(phi_now);

@@ -39,8 +39,8 @@ use isoray_shade::optics::{beer_lambert, interface, reflect, Split};
 use isoray_shade::{to_vec3, MaterialSample};
 use rayon::prelude::*;
 
-use crate::abuffer::{ABuffer, Fragment as AFragment, FragmentList};
-use crate::draw::{coverage_fragments, for_each_band, gbuffer, project, Cull, GPixel};
+use crate::abuffer::{Fragment as AFragment, FragmentList};
+use crate::draw::{coverage_fragments, for_each_band, gbuffer_with, is_cancelled, project_with, Cull, GPixel};
 use crate::envmap::{CubeMap, MapKind, SearchTolerance};
 use crate::pipeline::ViewTransform;
 use crate::scene::{mesh_scene_with, MeshedScene, SceneMeshError};
@@ -106,7 +106,11 @@ pub struct RasterOptions {
     pub tolerance: SearchTolerance,
     /// Record, per reflective pixel centre, what the reflection lookup found ([`RasterImage::probes`]).
     pub probes: bool,
-    /// Stops the render between its stages (meshing each object, maps, drawing, shading).
+    /// Stops the render soon after it is cancelled: it is checked per object
+    /// meshed, per face and per triangle drawn into each shadow buffer and
+    /// environment map, per triangle drawn into the image and per pixel
+    /// shaded, so the render returns [`RasterError::Cancelled`] within a few
+    /// milliseconds.
     pub cancel: Option<isoray_job::CancelToken>,
 }
 
@@ -208,6 +212,12 @@ pub enum RasterError {
     Cancelled,
 }
 
+impl From<isoray_job::Cancelled> for RasterError {
+    fn from(_: isoray_job::Cancelled) -> Self {
+        RasterError::Cancelled
+    }
+}
+
 /// `Err(Cancelled)` once the options' token is cancelled.
 fn stop(opts: &RasterOptions) -> Result<(), RasterError> {
     match &opts.cancel {
@@ -283,6 +293,11 @@ fn v3(p: DVec3) -> Vec3 {
 }
 
 impl Ctx<'_> {
+    /// The render's cancel token, which map searches check.
+    fn cancel(&self) -> Option<&isoray_job::CancelToken> {
+        self.opts.cancel.as_ref()
+    }
+
     /// The material of triangle `t` at `p`, looked up a hair outside the
     /// surface: a face lying on a checker boundary (a floor at y = 0) would
     /// otherwise flip between the two materials with rounding.
@@ -322,7 +337,8 @@ impl Ctx<'_> {
                     let far = 2.0 * map.radius + (p - map.faces.centre).length() + 1.0;
                     (p + l * far, -l, far)
                 };
-                let hit = map.search(origin, to_p, 0.0, total - guard, &self.opts.tolerance, |_| true);
+                let tol = &self.opts.tolerance;
+                let hit = map.search_with(origin, to_p, 0.0, total - guard, tol, |_| true, self.cancel());
                 if hit.is_some() {
                     0.0
                 } else {
@@ -385,13 +401,14 @@ impl Ctx<'_> {
                 };
                 let tris = self.tris;
                 let front = |t: u32| tris.face[t as usize].dot(r) < 0.0;
-                map.search(
+                map.search_with(
                     p,
                     r,
                     Self::guard(map, p, r, n),
                     f64::INFINITY,
                     &self.opts.tolerance,
                     front,
+                    self.cancel(),
                 )
                 .map(|h| (h.tri, h.point))
             }
@@ -410,13 +427,14 @@ impl Ctx<'_> {
             ReflectionMethod::ZBufferMap => {
                 let Some(map) = &self.zmap else { return self.sky(t) };
                 let other = |k: u32| tris.object[k as usize] != obj && tris.face[k as usize].dot(t) < 0.0;
-                match map.search(
+                match map.search_with(
                     p,
                     t,
                     Self::guard(map, p, t, n),
                     f64::INFINITY,
                     &self.opts.tolerance,
                     other,
+                    self.cancel(),
                 ) {
                     Some(h) => self.secondary(h.tri, h.point, p),
                     None => self.sky(t),
@@ -430,13 +448,14 @@ impl Ctx<'_> {
                 let mut weight = Vec3::ONE;
                 for _ in 0..4 {
                     let exit = |k: u32| tris.object[k as usize] == obj && tris.face[k as usize].dot(d) > 0.0;
-                    let Some(h) = map.search(
+                    let Some(h) = map.search_with(
                         o,
                         d,
                         Self::guard(map, o, d, nn),
                         f64::INFINITY,
                         &self.opts.tolerance,
                         exit,
+                        self.cancel(),
                     ) else {
                         return weight * self.sky(d);
                     };
@@ -450,13 +469,14 @@ impl Ctx<'_> {
                         Some(t2) => {
                             weight *= sp.transmit;
                             let outside = |k: u32| tris.face[k as usize].dot(t2) < 0.0;
-                            return match map.search(
+                            return match map.search_with(
                                 o,
                                 t2,
                                 Self::guard(map, o, t2, out_n),
                                 f64::INFINITY,
                                 &self.opts.tolerance,
                                 outside,
+                                self.cancel(),
                             ) {
                                 Some(h2) => weight * self.secondary(h2.tri, h2.point, o),
                                 None => weight * self.sky(t2),
@@ -526,12 +546,18 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
     // Shadow buffers and environment maps.
     let t0 = Instant::now();
     let size = opts.map_size;
-    let shadow_buffers =
-        (opts.shadows == ShadowMethod::Buffer).then(|| ShadowBuffers::build(scene, &tris, size, opts.near));
+    let cancel = opts.cancel.as_ref();
+    stop(opts)?;
+    let shadow_buffers = (opts.shadows == ShadowMethod::Buffer)
+        .then(|| ShadowBuffers::build_with(scene, &tris, size, opts.near, cancel))
+        .transpose()?;
     let need_amap = opts.shadows == ShadowMethod::EnvMap || opts.reflections == ReflectionMethod::ABufferMap;
-    let amap = need_amap.then(|| CubeMap::build(&tris, eye, size, MapKind::ABuffer, None, opts.near));
+    let amap = need_amap
+        .then(|| CubeMap::build_with(&tris, eye, size, MapKind::ABuffer, None, opts.near, cancel))
+        .transpose()?;
     let zmap = (opts.reflections == ReflectionMethod::ZBufferMap)
-        .then(|| CubeMap::build(&tris, eye, size, MapKind::ZBuffer, None, opts.near));
+        .then(|| CubeMap::build_with(&tris, eye, size, MapKind::ZBuffer, None, opts.near, cancel))
+        .transpose()?;
     let mut object_maps = HashMap::new();
     if opts.reflections == ReflectionMethod::BlinnNewell {
         for om in &meshed.objects {
@@ -540,7 +566,8 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
             }
             let Some([lo, hi]) = om.mesh.bounds() else { continue };
             let centre = (DVec3::from(lo) + DVec3::from(hi)) * 0.5;
-            let map = CubeMap::build(&tris, centre, size, MapKind::ZBuffer, Some(om.object as u32), opts.near);
+            let exclude = Some(om.object as u32);
+            let map = CubeMap::build_with(&tris, centre, size, MapKind::ZBuffer, exclude, opts.near, cancel)?;
             object_maps.insert(om.object as u32, map);
         }
     }
@@ -572,15 +599,15 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
             ctx.lighting.opacity(tris.material[t] as usize)
         }
     };
-    let projected = project(&tris, &view, eye, opts.near, |t| {
+    let cull = |t| {
         if opacity(t) >= 1.0 {
             Cull::Back
         } else {
             Cull::None
         }
-    });
+    };
+    let projected = project_with(&tris, &view, eye, opts.near, cull, cancel)?;
     let triangles = projected.len();
-    stop(opts)?;
 
     // Per-vertex (Gouraud) or per-face (flat) colours of the triangles drawn.
     let vertex_colors: HashMap<u32, [Vec3; 3]> = match opts.shading {
@@ -591,6 +618,9 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
             ids.dedup();
             ids.par_iter()
                 .map(|&t| {
+                    if is_cancelled(cancel) {
+                        return Err(RasterError::Cancelled);
+                    }
                     let k = t as usize;
                     let c = if opts.shading == Shading::Flat {
                         let corners = tris.corners[k];
@@ -602,9 +632,9 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
                         let bary = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
                         bary.map(|b| ctx.surface_color(t, b, eye))
                     };
-                    (t, c)
+                    Ok((t, c))
                 })
-                .collect()
+                .collect::<Result<_, _>>()?
         }
     };
     let shade = |tri: u32, b: [f64; 3]| -> Vec3 {
@@ -624,12 +654,15 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
     let mut g: Option<Vec<GPixel>> = None;
     let color: Vec<[f32; 3]> = match opts.hidden {
         HiddenSurface::ZBuffer => {
-            let gb = gbuffer(&projected, w, h);
+            let gb = gbuffer_with(&projected, w, h, cancel)?;
+            // Once cancelled, the remaining pixels are left black (and the image dropped).
             let c = gb
                 .par_iter()
                 .enumerate()
                 .map(|(i, px)| {
-                    if px.is_hit() {
+                    if is_cancelled(cancel) {
+                        [0.0; 3]
+                    } else if px.is_hit() {
                         shade(px.tri, px.bary).to_array()
                     } else {
                         miss(i).to_array()
@@ -644,9 +677,16 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
             for_each_band(&projected, &mut lists, w, |rows, chunk, it| {
                 let y0 = rows.start;
                 for p in it {
+                    if is_cancelled(cancel) {
+                        return;
+                    }
                     let t = p.tri as usize;
                     let alpha = opacity(t);
                     coverage_fragments(&p.v, w, rows.clone(), |cv| {
+                        // A large triangle is shaded pixel by pixel: stop within it too.
+                        if is_cancelled(cancel) {
+                            return;
+                        }
                         chunk[(cv.y - y0) * w + cv.x].insert(AFragment {
                             mask: cv.mask,
                             zmin: cv.zmin as f32,
@@ -658,27 +698,33 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
                     });
                 }
             });
-            let ab = ABuffer {
-                width: w,
-                height: h,
-                lists,
-            };
-            if scene.environment.is_none() {
-                ab.resolve_image(ctx.background.to_array())
-            } else {
-                ab.lists
-                    .par_iter()
-                    .enumerate()
-                    .map(|(i, l)| l.resolve(miss(i).to_array()))
-                    .collect()
-            }
+            stop(opts)?;
+            // `ABuffer::resolve_image` with the background of each pixel (the
+            // environment's, if any), checking the token per pixel.
+            lists
+                .par_iter()
+                .enumerate()
+                .map(|(i, l)| {
+                    if is_cancelled(cancel) {
+                        [0.0; 3]
+                    } else {
+                        l.resolve(miss(i).to_array())
+                    }
+                })
+                .collect()
         }
     };
+    stop(opts)?;
     let draw = t1.elapsed().as_secs_f64();
 
     let probes = if opts.probes && opts.reflections != ReflectionMethod::None {
-        let gb = g.unwrap_or_else(|| gbuffer(&projected, w, h));
-        probes(&ctx, &gb, eye)
+        let gb = match g {
+            Some(gb) => gb,
+            None => gbuffer_with(&projected, w, h, cancel)?,
+        };
+        let p = probes(&ctx, &gb, eye, cancel);
+        stop(opts)?;
+        p
     } else {
         Vec::new()
     };
@@ -695,12 +741,13 @@ pub fn raster_meshes(scene: &Scene, meshed: &MeshedScene, opts: &RasterOptions) 
     })
 }
 
-/// The reflection lookups of the reflective pixel centres of a G-buffer.
-fn probes(ctx: &Ctx, g: &[GPixel], eye: DVec3) -> Vec<ReflectionProbe> {
+/// The reflection lookups of the reflective pixel centres of a G-buffer
+/// (incomplete once `cancel` is cancelled).
+fn probes(ctx: &Ctx, g: &[GPixel], eye: DVec3, cancel: Option<&isoray_job::CancelToken>) -> Vec<ReflectionProbe> {
     g.par_iter()
         .enumerate()
         .filter_map(|(i, px)| {
-            if !px.is_hit() {
+            if !px.is_hit() || is_cancelled(cancel) {
                 return None;
             }
             let t = px.tri as usize;

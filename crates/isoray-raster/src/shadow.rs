@@ -17,9 +17,10 @@
 //! 8))`, θ the angle between the normal and the light direction.
 
 use glam::DVec3;
+use isoray_job::{CancelToken, Cancelled};
 use isoray_scene::{Camera, LightKind, Projection, Scene};
 
-use crate::draw::{gbuffer, project, Cull};
+use crate::draw::{gbuffer_with, project_with, Cull};
 use crate::envmap::{face_of, CubeFaces};
 use crate::pipeline::ViewTransform;
 use crate::triangles::SceneTriangles;
@@ -42,25 +43,26 @@ impl ShadowBuffer {
         size: usize,
         tan_half: f64,
         near: f64,
-    ) -> Self {
+        cancel: Option<&CancelToken>,
+    ) -> Result<Self, Cancelled> {
         let depth = views
             .iter()
             .map(|v| {
                 let eye = DVec3::from(v.eye());
-                let projected = project(tris, v, eye, near, |_| Cull::None);
-                gbuffer(&projected, size, size)
+                let projected = project_with(tris, v, eye, near, |_| Cull::None, cancel)?;
+                Ok(gbuffer_with(&projected, size, size, cancel)?
                     .into_iter()
                     .map(|p| p.depth as f32)
-                    .collect()
+                    .collect())
             })
-            .collect();
-        ShadowBuffer {
+            .collect::<Result<_, Cancelled>>()?;
+        Ok(ShadowBuffer {
             views,
             omni,
             size,
             tan_half,
             depth,
-        }
+        })
     }
 
     /// The fraction (0–1) of the 3×3 percentage-closer filter that sees point
@@ -114,6 +116,21 @@ pub struct ShadowBuffers {
 impl ShadowBuffers {
     /// Renders a `size`×`size` buffer (per face) for every light of `scene`.
     pub fn build(scene: &Scene, tris: &SceneTriangles, size: usize, near: f64) -> Self {
+        match Self::build_with(scene, tris, size, near, None) {
+            Ok(b) => b,
+            Err(Cancelled) => unreachable!("no token, no cancellation"),
+        }
+    }
+
+    /// [`ShadowBuffers::build`], stopping soon after `cancel` is cancelled
+    /// (checked before each face and each triangle drawn).
+    pub fn build_with(
+        scene: &Scene,
+        tris: &SceneTriangles,
+        size: usize,
+        near: f64,
+        cancel: Option<&CancelToken>,
+    ) -> Result<Self, Cancelled> {
         let size = size.max(1);
         // Directional buffers frame the bounded objects (twice their radius,
         // for the shadows they cast on unbounded ones such as a ground
@@ -137,7 +154,7 @@ impl ShadowBuffers {
                 | LightKind::Sphere { position, .. }
                 | LightKind::Rect { position, .. } => {
                     let faces = CubeFaces::new(DVec3::from(position), size);
-                    ShadowBuffer::render(tris, faces.views.to_vec(), true, size, 1.0, near)
+                    ShadowBuffer::render(tris, faces.views.to_vec(), true, size, 1.0, near, cancel)
                 }
                 LightKind::Directional { direction } => {
                     let l = DVec3::from(direction).normalize_or(DVec3::Y);
@@ -156,10 +173,18 @@ impl ShadowBuffers {
                         projection: Projection::Perspective,
                     };
                     let view = ViewTransform::new(&cam, size as u32, size as u32);
-                    ShadowBuffer::render(tris, vec![view], false, size, half.tan(), near.max(dist - 2.0 * radius))
+                    ShadowBuffer::render(
+                        tris,
+                        vec![view],
+                        false,
+                        size,
+                        half.tan(),
+                        near.max(dist - 2.0 * radius),
+                        cancel,
+                    )
                 }
             })
-            .collect();
-        ShadowBuffers { lights }
+            .collect::<Result<_, Cancelled>>()?;
+        Ok(ShadowBuffers { lights })
     }
 }

@@ -39,6 +39,13 @@ impl SceneTriangles {
             bounded: [DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)],
             ..SceneTriangles::default()
         };
+        let n: usize = meshed.objects.iter().map(|om| om.mesh.triangles.len()).sum();
+        out.corners.reserve_exact(n);
+        out.normals.reserve_exact(n);
+        out.face.reserve_exact(n);
+        out.material.reserve_exact(n);
+        out.object.reserve_exact(n);
+        out.two_sided.reserve_exact(n);
         for om in &meshed.objects {
             let mesh = &om.mesh;
             for (t, tri) in mesh.triangles.iter().enumerate() {

@@ -16,7 +16,7 @@ use crate::reader::Reader;
 type Result<T> = std::result::Result<T, SceneError>;
 
 /// How a scene is loaded.
-#[derive(Debug, Clone, Default)]
+#[derive(Clone, Default)]
 pub struct LoadOptions {
     /// The time `t` in seconds (default 0).
     pub time: f64,
@@ -32,6 +32,22 @@ pub struct LoadOptions {
     /// not compiled again. The scene keeps the cache for its own
     /// recompilations.
     pub objects: Option<crate::compile::ObjectCache>,
+    /// Told how far the load got: the stages of a surface's implicitization
+    /// (`surface `NAME`: …`, with their units) and `objects` (objects
+    /// compiled or reused of all).
+    pub progress: Option<std::sync::Arc<dyn isoray_job::Progress + Send>>,
+}
+
+impl std::fmt::Debug for LoadOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LoadOptions")
+            .field("time", &self.time)
+            .field("analyses", &self.analyses)
+            .field("cancel", &self.cancel)
+            .field("objects", &self.objects)
+            .field("progress", &self.progress.is_some())
+            .finish()
+    }
 }
 
 /// Reads and loads a scene file, applying `--set KEY=VALUE` overrides.
@@ -247,6 +263,9 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     }
     if let Some(token) = &options.cancel {
         lib.set_cancel(token.clone());
+    }
+    if let Some(p) = &options.progress {
+        lib.set_progress(p.clone());
     }
     let mut b = Build {
         src,

@@ -1194,6 +1194,7 @@ impl Scene {
             analyses: Some(self.library.analyses().clone()),
             cancel: self.library.cancel_token().cloned(),
             objects: Some(self.cache.clone()),
+            progress: self.library.progress().cloned(),
         };
         let fresh = crate::load_str_with(&src.text, &src.path, &src.overrides, &opts)?;
         let origin = self.origin.clone();

@@ -469,6 +469,10 @@ impl<'a> Build<'a> {
                         ))
                     }
                 };
+                let count = items.len() as u64;
+                if let Some(p) = lib.progress() {
+                    p.stage("objects");
+                }
                 for (i, ov) in items.into_iter().enumerate() {
                     let mut r = Reader::new(src, ov, &format!("object.{i}"))?;
                     let name = r.string("name")?.map(|(s, _)| s.to_string());
@@ -582,6 +586,9 @@ impl<'a> Build<'a> {
                         transform,
                         fragment,
                     });
+                    if let Some(p) = lib.progress() {
+                        p.update(i as u64 + 1, count);
+                    }
                 }
             }
         }

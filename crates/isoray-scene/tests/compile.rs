@@ -151,3 +151,44 @@ fn every_value_knows_where_it_was_written() {
     );
     assert_eq!(s.origin_of("light.3.intensity"), None);
 }
+
+/// Records the stages and updates a load reports.
+#[derive(Default)]
+struct Recorder(std::sync::Mutex<Vec<(String, u64, u64)>>);
+
+impl isoray_job::Progress for Recorder {
+    fn update(&self, done: u64, total: u64) {
+        let mut v = self.0.lock().unwrap();
+        let stage = v.last().map(|s| s.0.clone()).unwrap_or_default();
+        v.push((stage, done, total));
+    }
+    fn stage(&self, name: &str) {
+        self.0.lock().unwrap().push((name.to_string(), 0, 0));
+    }
+}
+
+#[test]
+fn a_load_reports_its_surface_analyses_and_objects() {
+    let text = "[surface.ball]\nparametric = { x = \"2*s/(s^2+t^2+1)\", y = \"2*t/(s^2+t^2+1)\", z = \"(s^2+t^2-1)/(s^2+t^2+1)\" }\n\
+                [[object]]\nshape = \"ball(p)\"\n[[object]]\nshape = \"sphere(p - vec3(3.0, 0.0, 0.0), 1.0)\"\n";
+    let rec = std::sync::Arc::new(Recorder::default());
+    let opts = LoadOptions {
+        progress: Some(rec.clone()),
+        ..LoadOptions::default()
+    };
+    let s = load_str_with(text, "t.toml", &[], &opts).unwrap_or_else(|e| panic!("{}", e.rendered));
+    assert_eq!(s.objects.len(), 2);
+    let seen = rec.0.lock().unwrap().clone();
+    let stages: Vec<&str> = seen.iter().filter(|e| e.2 == 0).map(|e| e.0.as_str()).collect();
+    assert!(
+        stages.iter().any(|s| s.starts_with("surface `ball`: ")),
+        "the implicitization reports its stages: {stages:?}"
+    );
+    assert_eq!(stages.last(), Some(&"objects"));
+    let objects: Vec<(u64, u64)> = seen
+        .iter()
+        .filter(|e| e.0 == "objects" && e.2 > 0)
+        .map(|e| (e.1, e.2))
+        .collect();
+    assert_eq!(objects, vec![(1, 2), (2, 2)]);
+}

@@ -96,6 +96,18 @@ pub struct Library {
     analyses: Analyses,
     /// Stops long analyses (implicitization) when cancelled.
     cancel: Option<isoray_job::CancelToken>,
+    /// Told how far long analyses (implicitization) got.
+    progress: Option<Reporter>,
+}
+
+/// A shared progress reporter (shown in `Debug` as present or not).
+#[derive(Clone)]
+struct Reporter(std::sync::Arc<dyn isoray_job::Progress + Send>);
+
+impl std::fmt::Debug for Reporter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Reporter")
+    }
 }
 
 impl Library {
@@ -122,6 +134,17 @@ impl Library {
     /// with an error that says it was cancelled, and nothing is cached.
     pub fn set_cancel(&mut self, token: isoray_job::CancelToken) {
         self.cancel = Some(token);
+    }
+
+    /// Lets `progress` hear how far long analyses get: an implicitization
+    /// reports its stages (named `surface `NAME`: …`) and their units.
+    pub fn set_progress(&mut self, progress: std::sync::Arc<dyn isoray_job::Progress + Send>) {
+        self.progress = Some(Reporter(progress));
+    }
+
+    /// The reporter of long analyses, if any.
+    pub fn progress(&self) -> Option<&std::sync::Arc<dyn isoray_job::Progress + Send>> {
+        self.progress.as_ref().map(|r| &r.0)
     }
 
     /// The token that stops long analyses, if any.

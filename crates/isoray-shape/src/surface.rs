@@ -293,12 +293,21 @@ fn analyze_parametric(lib: &Library, s: &Surface, params: &[Value]) -> Result<An
         .collect();
     let texts: Vec<&str> = texts.iter().map(String::as_str).collect();
     let t = Instant::now();
+    // Progress of the implicitization, its stages named after the surface.
+    let progress = lib.progress().map(|p| {
+        let named: std::sync::Arc<dyn isoray_job::Progress + Send> = std::sync::Arc::new(Named {
+            prefix: format!("surface `{}`: ", s.name),
+            inner: p.clone(),
+        });
+        named
+    });
     let quick = GroebnerOptions {
         budget: Budget {
             time: Some(GROEBNER_TIME),
             interrupt: lib.cancel_token().cloned(),
             ..Default::default()
         },
+        progress: progress.clone(),
         ..Default::default()
     };
     let (result, method) = match implicitize_groebner(&texts, &["s", "t"], &quick) {
@@ -312,6 +321,7 @@ fn analyze_parametric(lib: &Library, s: &Surface, params: &[Value]) -> Result<An
                 &InterpolationOptions {
                     time: Some(INTERPOLATION_TIME),
                     interrupt: lib.cancel_token().cloned(),
+                    progress,
                     ..Default::default()
                 },
             ),
@@ -738,6 +748,21 @@ impl ParametricCoords {
             dt[k] = v.d[1];
         }
         (p, ds, dt)
+    }
+}
+
+/// A progress reporter whose stage names get a prefix (the surface's name).
+struct Named {
+    prefix: String,
+    inner: std::sync::Arc<dyn isoray_job::Progress + Send>,
+}
+
+impl isoray_job::Progress for Named {
+    fn update(&self, done: u64, total: u64) {
+        self.inner.update(done, total)
+    }
+    fn stage(&self, name: &str) {
+        self.inner.stage(&format!("{}{name}", self.prefix))
     }
 }
 

@@ -3,6 +3,8 @@
 use std::io::Read;
 use std::time::Duration;
 
+use crate::jobs::{reporter, JobBar};
+
 use isoray_algebra::coeff::is_prime;
 use isoray_algebra::groebner::groebner_in;
 use isoray_algebra::implicit::implicitize_groebner;
@@ -137,7 +139,16 @@ pub fn cmd_groebner(
     for (t, origin) in &texts {
         parsed.push(parse_poly(&ring, t).map_err(|e| bad(located(origin, t, &e)))?);
     }
-    let opts = options(timeout)?;
+    let bar = JobBar::for_terminal();
+    let opts = GroebnerOptions {
+        progress: reporter(&bar),
+        ..options(timeout)?
+    };
+    let done = || {
+        if let Some(b) = &bar {
+            b.finish();
+        }
+    };
     let fail = |e: GroebnerError| match e {
         GroebnerError::Interrupted { .. } => crate::jobs::cancelled(),
         e => Failure {
@@ -146,7 +157,9 @@ pub fn cmd_groebner(
         },
     };
     let (lines, st) = if field == 0 {
-        let r = groebner(&ring, &parsed, &opts).map_err(fail)?;
+        let r = groebner(&ring, &parsed, &opts);
+        done();
+        let r = r.map_err(fail)?;
         (r.basis.iter().map(|p| p.display(&ring)).collect::<Vec<_>>(), r.stats)
     } else {
         let mut mods = Vec::new();
@@ -162,7 +175,9 @@ pub fn cmd_groebner(
             }
             mods.push(Poly::from_terms(&ring, terms));
         }
-        let (basis, st) = groebner_in(&ring, &mods, &opts).map_err(fail)?;
+        let r = groebner_in(&ring, &mods, &opts);
+        done();
+        let (basis, st) = r.map_err(fail)?;
         (basis.iter().map(|p| p.display(&ring)).collect(), st)
     };
     for l in lines {
@@ -199,7 +214,11 @@ pub fn cmd_implicitize(
         vec!["t".into()]
     };
     let params: Vec<&str> = params.unwrap_or(&default_params).iter().map(|s| s.as_str()).collect();
-    let opts = options(timeout)?;
+    let bar = JobBar::for_terminal();
+    let opts = GroebnerOptions {
+        progress: reporter(&bar),
+        ..options(timeout)?
+    };
     let interp = |time| {
         isoray_algebra::interp::implicitize_interpolation(
             &coords,
@@ -207,6 +226,7 @@ pub fn cmd_implicitize(
             &isoray_algebra::interp::InterpolationOptions {
                 time,
                 interrupt: Some(crate::jobs::cancel_token()),
+                progress: reporter(&bar),
                 ..Default::default()
             },
         )
@@ -223,6 +243,7 @@ pub fn cmd_implicitize(
                     interrupt: Some(crate::jobs::cancel_token()),
                     ..Default::default()
                 },
+                progress: reporter(&bar),
                 ..Default::default()
             };
             match implicitize_groebner(&coords, &params, &first) {
@@ -232,6 +253,9 @@ pub fn cmd_implicitize(
             }
         }
     };
+    if let Some(b) = &bar {
+        b.finish();
+    }
     match result {
         Ok(imp) => {
             println!("{}", imp.display());

@@ -266,12 +266,19 @@ impl SceneArgs {
     pub(crate) fn load(&self, extra: &[String]) -> Result<Scene, Failure> {
         let mut overrides = self.set.clone();
         overrides.extend_from_slice(extra);
+        // Long surface analyses (implicitization) show a bar on a terminal.
+        let bar = jobs::JobBar::for_terminal();
         let opts = LoadOptions {
             time: self.time,
             cancel: Some(jobs::cancel_token()),
+            progress: jobs::reporter(&bar),
             ..LoadOptions::default()
         };
-        Ok(load_with(&self.scene, &overrides, &opts)?)
+        let scene = load_with(&self.scene, &overrides, &opts);
+        if let Some(b) = &bar {
+            b.finish();
+        }
+        Ok(scene?)
     }
 
     /// The scene file.

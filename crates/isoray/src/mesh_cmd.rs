@@ -154,13 +154,12 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
         lipschitz,
     };
     let single = a.name.is_some();
-    let progress = Progress::new(a.quiet);
+    let progress = MeshBar::new(a.quiet);
     let mut mesh = Mesh::default();
     let mut summaries = Vec::new();
     for t in &targets {
         progress.begin(&t.label);
-        let report = |stage: Stage, f: f64| progress.update(stage, f);
-        let ctl = Control::new(Some(&report), Some(cancel.flag()));
+        let ctl = Control::job(&progress, &cancel);
         let result = pool.install(|| mesh_shape_with(t.shape.tape(), &settings, &ctl));
         progress.end();
         let (part, stats) = match result {
@@ -432,15 +431,63 @@ fn fmt3(p: [f64; 3]) -> String {
     format!("{:.4}, {:.4}, {:.4}", p[0], p[1], p[2])
 }
 
-/// A progress bar on stderr (only on a terminal, and only after half a second).
-struct Progress {
+/// The stages of meshing in the order they run (the bar's sections).
+const STAGES: [Stage; 7] = [
+    Stage::Bounds,
+    Stage::Octree,
+    Stage::Corners,
+    Stage::Edges,
+    Stage::Vertices,
+    Stage::Faces,
+    Stage::Finish,
+];
+
+/// A progress bar on stderr (only on a terminal, and only after half a
+/// second), fed by the mesher's [`isoray_job::Progress`] reports
+/// ([`Control::job`]): each stage by its name, then its fraction done.
+struct MeshBar {
     enabled: bool,
-    state: Mutex<Option<(String, Instant, Option<indicatif::ProgressBar>)>>,
+    state: Mutex<Option<Meshing>>,
 }
 
-impl Progress {
+/// What [`MeshBar`] shows while a target is meshed.
+struct Meshing {
+    /// The target's label.
+    label: String,
+    /// When it started.
+    start: Instant,
+    /// The bar, once shown.
+    bar: Option<indicatif::ProgressBar>,
+    /// The stage reported last.
+    stage: Stage,
+}
+
+impl isoray_job::Progress for MeshBar {
+    fn stage(&self, name: &str) {
+        let Ok(mut guard) = self.state.lock() else { return };
+        if let (Some(s), Some(m)) = (STAGES.iter().find(|s| s.name() == name), guard.as_mut()) {
+            m.stage = *s;
+        }
+    }
+
+    fn update(&self, done: u64, total: u64) {
+        if !self.enabled {
+            return;
+        }
+        let stage = match self.state.lock() {
+            Ok(guard) => match guard.as_ref() {
+                Some(m) => m.stage,
+                None => return,
+            },
+            Err(_) => return,
+        };
+        self.show(stage, if total == 0 { 0.0 } else { done as f64 / total as f64 });
+    }
+}
+
+impl MeshBar {
     fn new(quiet: bool) -> Self {
-        Progress {
+        MeshBar {
             enabled: !quiet && std::io::stderr().is_terminal(),
             state: Mutex::new(None),
         }
@@ -448,16 +495,22 @@ impl Progress {
 
     fn begin(&self, label: &str) {
         if let Ok(mut s) = self.state.lock() {
-            *s = Some((label.to_string(), Instant::now(), None));
+            *s = Some(Meshing {
+                label: label.to_string(),
+                start: Instant::now(),
+                bar: None,
+                stage: Stage::Bounds,
+            });
         }
     }
 
-    fn update(&self, stage: Stage, fraction: f64) {
+    /// Shows `stage` `fraction` done.
+    fn show(&self, stage: Stage, fraction: f64) {
         if !self.enabled {
             return;
         }
         let Ok(mut guard) = self.state.lock() else { return };
-        let Some((label, start, bar)) = guard.as_mut() else {
+        let Some(Meshing { label, start, bar, .. }) = guard.as_mut() else {
             return;
         };
         if bar.is_none() && start.elapsed() > Duration::from_millis(500) {
@@ -471,17 +524,8 @@ impl Progress {
             *bar = Some(b);
         }
         if let Some(b) = bar {
-            let order = [
-                Stage::Bounds,
-                Stage::Octree,
-                Stage::Corners,
-                Stage::Edges,
-                Stage::Vertices,
-                Stage::Faces,
-                Stage::Finish,
-            ];
-            let i = order.iter().position(|s| *s == stage).unwrap_or(0);
-            let done = (i as f64 + fraction.clamp(0.0, 1.0)) / order.len() as f64;
+            let i = STAGES.iter().position(|s| *s == stage).unwrap_or(0);
+            let done = (i as f64 + fraction.clamp(0.0, 1.0)) / STAGES.len() as f64;
             b.set_message(format!("{label}: {}", stage.name()));
             b.set_position((done * 1000.0) as u64);
         }
@@ -489,7 +533,7 @@ impl Progress {
 
     fn end(&self) {
         if let Ok(mut s) = self.state.lock() {
-            if let Some((_, _, Some(b))) = s.take() {
+            if let Some(Meshing { bar: Some(b), .. }) = s.take() {
                 b.finish_and_clear();
             }
         }

@@ -547,19 +547,20 @@ fn set_writes_a_scene_that_renders_like_the_overrides() {
     assert_eq!(std::fs::read(&saved).unwrap(), before);
 }
 
-#[test]
-fn ctrl_c_stops_a_render_with_130_and_writes_nothing() {
-    let out = tmp("cancelled.png");
+/// Runs `isoray ARGS… -o OUT` over an existing OUT, sends SIGINT after
+/// `after_ms` and checks: exit 130, OUT untouched; returns how long the
+/// process took to end after the signal.
+fn interrupt(args: &[&str], name: &str, after_ms: u64) -> std::time::Duration {
+    let out = tmp(name);
     std::fs::write(&out, b"an earlier output").unwrap();
     let mut child = isoray()
-        .arg("render")
-        .arg(examples().join("showcase.toml"))
-        .args(["--width", "1280", "--height", "720", "--aa", "2", "-q", "-o"])
+        .args(args)
+        .args(["-q", "-o"])
         .arg(&out)
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(400));
+    std::thread::sleep(std::time::Duration::from_millis(after_ms));
     let sent = std::time::Instant::now();
     // The shell's built-in `kill` (no procps needed).
     let kill = Command::new("sh")
@@ -570,6 +571,37 @@ fn ctrl_c_stops_a_render_with_130_and_writes_nothing() {
     let waited = sent.elapsed();
     assert_eq!(status.code(), Some(130));
     assert_eq!(std::fs::read(&out).unwrap(), b"an earlier output");
+    waited
+}
+
+#[test]
+fn ctrl_c_stops_a_render_with_130_and_writes_nothing() {
+    let scene = examples().join("showcase.toml");
+    let scene = scene.to_str().unwrap();
+    let args = ["render", scene, "--width", "1280", "--height", "720", "--aa", "2"];
+    let waited = interrupt(&args, "cancelled.png", 400);
     // The renderer stops within a tile; the grace period bounds the rest.
+    assert!(waited < std::time::Duration::from_secs(2), "{waited:?}");
+}
+
+#[test]
+fn ctrl_c_stops_a_raster_inside_its_maps_or_shading() {
+    let scene = examples().join("reflections.toml");
+    let scene = scene.to_str().unwrap();
+    let args = [
+        "raster",
+        scene,
+        "--width",
+        "1280",
+        "--height",
+        "720",
+        "--shadows",
+        "envmap",
+        "--reflections",
+        "abuffer-map",
+    ];
+    // Past the meshing (a few tenths of a second): in the maps or the shading.
+    let waited = interrupt(&args, "cancelled-raster.png", 1500);
+    // Milliseconds in practice (per triangle, texel and pixel); generous for a loaded machine.
     assert!(waited < std::time::Duration::from_secs(2), "{waited:?}");
 }
