@@ -1001,9 +1001,9 @@ impl Scene {
                 "the time must be a finite number of seconds, found {t}"
             )));
         }
-        let (next, changed) = self.next_inputs(&[isoray_shape::TIME], |inputs| inputs[0] = t)?;
+        let (next, changed, values) = self.next_inputs(&[isoray_shape::TIME], |inputs| inputs[0] = t)?;
         self.library.set_time(t);
-        self.apply_inputs(next, changed)
+        self.apply_inputs(next, changed, values)
     }
 
     /// Sets a number or vector parameter (`[params]`) to `value`: an error
@@ -1042,7 +1042,7 @@ impl Scene {
             }
         }
         let vars: Vec<u32> = (at..at + ty.width() as u32).collect();
-        let (next, changed) = self.next_inputs(&vars, |inputs| {
+        let (next, changed, values) = self.next_inputs(&vars, |inputs| {
             for (k, x) in comps.iter().enumerate() {
                 inputs[at as usize + k] = *x;
             }
@@ -1051,7 +1051,7 @@ impl Scene {
         if let Some(p) = self.params.iter_mut().find(|(n, _)| n == name) {
             p.1 = value;
         }
-        self.apply_inputs(next, changed)
+        self.apply_inputs(next, changed, values)
     }
 
     /// The inputs after setting base inputs with `set`, with every object
@@ -1061,7 +1061,7 @@ impl Scene {
         &self,
         vars: &[u32],
         set: impl FnOnce(&mut Vec<f64>),
-    ) -> Result<(Vec<f64>, Vec<u32>), crate::SceneError> {
+    ) -> Result<(Vec<f64>, Vec<u32>, Option<Values>), crate::SceneError> {
         let mut next = self.inputs.clone();
         set(&mut next);
         let mut changed = vars.to_vec();
@@ -1089,8 +1089,8 @@ impl Scene {
                 }
             }
         }
-        self.driven_values(&next)?;
-        Ok((next, changed))
+        let values = self.driven_values(&next)?;
+        Ok((next, changed, values))
     }
 
     /// Sets a camera, light or material value by its dotted key, as written
@@ -1122,8 +1122,11 @@ impl Scene {
     }
 
     /// The camera, lights and materials with every driven value computed
-    /// at the inputs `vars`, checked.
-    fn driven_values(&self, vars: &[f64]) -> Result<Values, crate::SceneError> {
+    /// at the inputs `vars`, checked; None when no value is driven.
+    fn driven_values(&self, vars: &[f64]) -> Result<Option<Values>, crate::SceneError> {
+        if self.driven.is_empty() {
+            return Ok(None);
+        }
         let t = vars.first().copied().unwrap_or(0.0);
         let mut values = self.values();
         for d in &self.driven {
@@ -1132,14 +1135,20 @@ impl Scene {
                 .set(&d.key, &v)
                 .map_err(|e| crate::SceneError::usage(format!("{} (at t = {t}, from its expression)", e.message)))?;
         }
-        Ok(values)
+        Ok(Some(values))
     }
 
     /// Applies new inputs: recompiles objects that bound a changed one, and
     /// re-derives the closed forms of objects that read one.
-    fn apply_inputs(&mut self, next: Vec<f64>, changed: Vec<u32>) -> Result<(), crate::SceneError> {
-        let values = self.driven_values(&next)?;
-        self.store_values(values);
+    fn apply_inputs(
+        &mut self,
+        next: Vec<f64>,
+        changed: Vec<u32>,
+        values: Option<Values>,
+    ) -> Result<(), crate::SceneError> {
+        if let Some(values) = values {
+            self.store_values(values);
+        }
         self.inputs = next;
         let vars = &changed[..];
         let bound = self
