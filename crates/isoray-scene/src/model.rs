@@ -796,6 +796,10 @@ pub struct Scene {
     pub(crate) cache: crate::compile::ObjectCache,
 }
 
+/// What a change of the base inputs leads to: the new inputs (placements
+/// computed again), the indices that changed, and the driven values.
+type NextInputs = (Vec<f64>, Vec<u32>, Option<Values>);
+
 /// The values that [`Scene::set_value`] and driven expressions change,
 /// gathered so that a set of changes is checked before any is stored.
 #[derive(Debug, Clone)]
@@ -1061,7 +1065,7 @@ impl Scene {
         &self,
         vars: &[u32],
         set: impl FnOnce(&mut Vec<f64>),
-    ) -> Result<(Vec<f64>, Vec<u32>, Option<Values>), crate::SceneError> {
+    ) -> Result<NextInputs, crate::SceneError> {
         let mut next = self.inputs.clone();
         set(&mut next);
         let mut changed = vars.to_vec();
