@@ -28,6 +28,7 @@ mod lower;
 pub mod surface;
 pub mod syntax;
 pub mod types;
+pub mod wgsl;
 
 pub use diag::{Diagnostic, SourceId, Span};
 pub use eval::{gradient, BatchEvaluator, Dual, GradientMode, PointEvaluator, LANES};
