@@ -49,14 +49,36 @@ fn iso_ln(x: f32) -> f32 {
     if (x == 0.0) { return -iso_inf(); }
     return log(x);
 }
-fn iso_asin(x: f32) -> f32 { return select(asin(x), iso_nan(), abs(x) > 1.0 || iso_is_nan(x)); }
-fn iso_acos(x: f32) -> f32 { return select(acos(x), iso_nan(), abs(x) > 1.0 || iso_is_nan(x)); }
+// Through atan2 (GPU asin/acos are coarse approximations); NaN outside [-1, 1].
+fn iso_asin(x: f32) -> f32 {
+    return select(iso_atan2(x, sqrt((1.0 - x) * (1.0 + x))), iso_nan(), abs(x) > 1.0 || iso_is_nan(x));
+}
+fn iso_acos(x: f32) -> f32 {
+    return select(iso_atan2(sqrt((1.0 - x) * (1.0 + x)), x), iso_nan(), abs(x) > 1.0 || iso_is_nan(x));
+}
+fn iso_atan(x: f32) -> f32 { return select(atan(x), x, iso_is_nan(x)); }
+// IEEE atan2 at zeros, infinities and NaN; WGSL's atan2 elsewhere.
+fn iso_atan2(y: f32, x: f32) -> f32 {
+    let pi = 3.14159265358979;
+    if (iso_is_nan(x) || iso_is_nan(y)) { return iso_nan(); }
+    let x_neg = bitcast<u32>(x) >= 0x80000000u;
+    let y_sign = select(1.0, -1.0, bitcast<u32>(y) >= 0x80000000u);
+    if (y == 0.0) { return select(y, y_sign * pi, x_neg); }
+    if (x == 0.0) { return y_sign * pi * 0.5; }
+    let xi = abs(x) == iso_inf();
+    let yi = abs(y) == iso_inf();
+    if (xi && yi) { return y_sign * select(pi * 0.25, pi * 0.75, x_neg); }
+    if (yi) { return y_sign * pi * 0.5; }
+    if (xi) { return select(y_sign * 0.0, y_sign * pi, x_neg); }
+    return atan2(y, x);
+}
 // powf: x^0 = 1 and 1^y = 1 even for NaN; negative bases need whole
 // exponents (odd ones keep the sign); signed zeros and infinities as IEEE pow.
 fn iso_odd(b: f32) -> bool { return b == floor(b) && abs(b) < 16777216.0 && (i32(abs(b)) & 1) == 1; }
 fn iso_pow(a: f32, b: f32) -> f32 {
     if (b == 0.0 || a == 1.0) { return 1.0; }
     if (iso_is_nan(a) || iso_is_nan(b)) { return iso_nan(); }
+    if (b == 1.0) { return a; }
     let neg = bitcast<u32>(a) >= 0x80000000u;
     let odd = iso_odd(b);
     if (a == 0.0) {
@@ -88,7 +110,7 @@ pub fn unary(op: UnOp, a: &str) -> String {
         UnOp::Tan => format!("tan({a})"),
         UnOp::Asin => format!("iso_asin({a})"),
         UnOp::Acos => format!("iso_acos({a})"),
-        UnOp::Atan => format!("atan({a})"),
+        UnOp::Atan => format!("iso_atan({a})"),
         UnOp::Exp => format!("exp({a})"),
         UnOp::Ln => format!("iso_ln({a})"),
         UnOp::Floor => format!("floor({a})"),
@@ -108,7 +130,7 @@ pub fn binary(op: BinOp, a: &str, b: &str) -> String {
         BinOp::Min => format!("iso_min({a}, {b})"),
         BinOp::Max => format!("iso_max({a}, {b})"),
         BinOp::Pow => format!("iso_pow({a}, {b})"),
-        BinOp::Atan2 => format!("atan2({a}, {b})"),
+        BinOp::Atan2 => format!("iso_atan2({a}, {b})"),
     }
 }
 

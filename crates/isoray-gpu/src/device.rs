@@ -1,0 +1,85 @@
+//! The GPU device: a Vulkan adapter found headless, and its queue.
+
+/// What can go wrong on the GPU.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter: there is no Vulkan driver.
+    #[error(
+        "no GPU adapter found: isoray's GPU backend needs a Vulkan driver; for a software one install \
+         Mesa's lavapipe (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers libvulkan1`)"
+    )]
+    NoAdapter,
+    /// The adapter refused a device.
+    #[error("the GPU adapter `{adapter}` gave no device: {message}")]
+    Device {
+        /// The adapter's name.
+        adapter: String,
+        /// What wgpu said.
+        message: String,
+    },
+    /// A shader did not compile, or a pass failed.
+    #[error("GPU: {0}")]
+    Gpu(String),
+}
+
+/// A GPU device and its queue, with the adapter's description.
+pub struct Gpu {
+    pub(crate) device: wgpu::Device,
+    pub(crate) queue: wgpu::Queue,
+    info: wgpu::AdapterInfo,
+}
+
+impl std::fmt::Debug for Gpu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Gpu").field("adapter", &self.adapter_name()).finish()
+    }
+}
+
+impl Gpu {
+    /// The first Vulkan adapter (a real GPU before a software one), headless.
+    pub fn new() -> Result<Gpu, GpuError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::VULKAN;
+        desc.flags = wgpu::InstanceFlags::empty();
+        let instance = wgpu::Instance::new(desc);
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+        // A real GPU first: discrete, integrated, then anything else (lavapipe is a CPU).
+        adapters.sort_by_key(|a| match a.get_info().device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            _ => 3,
+        });
+        let adapter = adapters.into_iter().next().ok_or(GpuError::NoAdapter)?;
+        let info = adapter.get_info();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("isoray"),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: info.name.clone(),
+            message: e.to_string(),
+        })?;
+        Ok(Gpu { device, queue, info })
+    }
+
+    /// The adapter, as the summary line names it: `llvmpipe (LLVM 15.0.6, 256 bits)`.
+    pub fn adapter_name(&self) -> String {
+        if self.info.driver_info.is_empty() {
+            self.info.name.clone()
+        } else {
+            format!("{} ({})", self.info.name, self.info.driver_info)
+        }
+    }
+
+    /// Waits until the GPU has finished `submission`.
+    pub(crate) fn wait(&self, submission: wgpu::SubmissionIndex) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(submission),
+                timeout: None,
+            })
+            .map(|_| ())
+            .map_err(|e| GpuError::Gpu(format!("waiting for the GPU: {e}")))
+    }
+}

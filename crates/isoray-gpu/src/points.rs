@@ -1,0 +1,154 @@
+//! Evaluating a shape tape at points in a compute pass.
+
+use isoray_shape::wgsl::{WgslFunction, PRELUDE};
+use wgpu::util::DeviceExt;
+
+use crate::{Gpu, GpuError};
+
+/// A compute pipeline that evaluates one tape's WGSL function at points.
+#[derive(Debug)]
+pub struct PointShader {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+const WORKGROUP: u32 = 64;
+
+/// The compute shader around `function` (named `name`, reading `iso_in`).
+pub fn point_module(function: &WgslFunction, name: &str) -> String {
+    format!(
+        "{PRELUDE}\n@group(0) @binding(0) var<storage, read> iso_in: array<f32>;\n\
+         @group(0) @binding(1) var<storage, read> points: array<f32>;\n\
+         @group(0) @binding(2) var<storage, read_write> out: array<f32>;\n\
+         {}\n\
+         @compute @workgroup_size({WORKGROUP})\n\
+         fn main(@builtin(global_invocation_id) id: vec3<u32>) {{\n\
+         \x20   let i = id.x;\n\
+         \x20   if (i >= arrayLength(&out)) {{ return; }}\n\
+         \x20   let p = vec3<f32>(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]);\n\
+         \x20   out[i] = {name}(p);\n\
+         }}\n",
+        function.code
+    )
+}
+
+impl Gpu {
+    /// Compiles the compute pipeline evaluating `function`, whose name in
+    /// its code is `name` and whose input-derived values it reads from
+    /// `iso_in` from index 0 (as [`isoray_shape::wgsl::emit_tape`] writes
+    /// it with `buffer = "iso_in"`, `base = 0`).
+    pub fn point_shader(&self, function: &WgslFunction, name: &str) -> Result<PointShader, GpuError> {
+        let source = point_module(function, name);
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(name),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let entry = |binding, read_only| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let layout = self.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("points"),
+            entries: &[entry(0, true), entry(1, true), entry(2, false)],
+        });
+        let pipeline_layout = self.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("points"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(name),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Gpu(format!("the shader of `{name}` did not compile: {e}")));
+        }
+        Ok(PointShader { pipeline, layout })
+    }
+
+    /// The values of the shader's tape at `points`, with `inputs` in its
+    /// input buffer (see [`WgslFunction::fill`]).
+    pub fn eval_points(&self, shader: &PointShader, inputs: &[f32], points: &[[f32; 3]]) -> Result<Vec<f32>, GpuError> {
+        if points.is_empty() {
+            return Ok(Vec::new());
+        }
+        let bytes = |v: &[f32]| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
+        let mut input_values = inputs.to_vec();
+        if input_values.is_empty() {
+            input_values.push(0.0); // a storage buffer may not be empty
+        }
+        let flat: Vec<f32> = points.iter().flatten().copied().collect();
+        let storage = wgpu::BufferUsages::STORAGE;
+        let in_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("iso_in"),
+            contents: &bytes(&input_values),
+            usage: storage,
+        });
+        let pt_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("points"),
+            contents: &bytes(&flat),
+            usage: storage,
+        });
+        let size = (points.len() * 4) as u64;
+        let out_buf = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("out"),
+            size,
+            usage: storage | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let read_buf = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("read-back"),
+            size,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("points"),
+            layout: &shader.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: in_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: pt_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: out_buf.as_entire_binding(),
+                },
+            ],
+        });
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&shader.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups((points.len() as u32).div_ceil(WORKGROUP), 1, 1);
+        }
+        enc.copy_buffer_to_buffer(&out_buf, 0, &read_buf, 0, size);
+        let submission = self.queue.submit([enc.finish()]);
+        let slice = read_buf.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        self.wait(submission)?;
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Gpu(format!("reading results back: {e}")))?;
+        Ok(view
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect())
+    }
+}
