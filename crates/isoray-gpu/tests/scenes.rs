@@ -34,7 +34,15 @@ fn points() -> Vec<[f32; 3]> {
 fn compare(g: &Gpu, shape: &Shape, vars: &[f64], pts: &[[f32; 3]], what: &str) -> f64 {
     let tape = shape.tape();
     let f = emit_tape(tape, "f", "iso_in", 0);
+    let t0 = std::time::Instant::now();
     let shader = g.point_shader(&f, "f").unwrap_or_else(|e| panic!("{what}: {e}"));
+    if !what.contains("object") {
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        eprintln!(
+            "{what}: {} instructions, shader and pipeline built in {ms:.1} ms",
+            tape.len()
+        );
+    }
     let gpu = g
         .eval_points(&shader, &f.fill(tape, vars), pts)
         .unwrap_or_else(|e| panic!("{what}: {e}"));
