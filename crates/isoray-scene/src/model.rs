@@ -1061,11 +1061,7 @@ impl Scene {
     /// The inputs after setting base inputs with `set`, with every object
     /// placement computed again, and the indices that changed (`vars` and
     /// the placements that moved); an error when a scale is not positive.
-    fn next_inputs(
-        &self,
-        vars: &[u32],
-        set: impl FnOnce(&mut Vec<f64>),
-    ) -> Result<NextInputs, crate::SceneError> {
+    fn next_inputs(&self, vars: &[u32], set: impl FnOnce(&mut Vec<f64>)) -> Result<NextInputs, crate::SceneError> {
         let mut next = self.inputs.clone();
         set(&mut next);
         let mut changed = vars.to_vec();
