@@ -6,7 +6,7 @@
 //! which `.ci/run` installs).
 
 use isoray_gpu::{accuracy, Gpu};
-use isoray_shape::conformance::{self, BINARY, UNARY};
+use isoray_shape::conformance;
 use isoray_shape::ir::{BinOp, Builder, UnOp};
 use isoray_shape::wgsl::emit_tape;
 
@@ -30,62 +30,55 @@ fn run(g: &Gpu, build: impl Fn(&mut Builder) -> isoray_shape::ir::Node, pts: &[[
 fn every_operation_follows_the_reference_on_the_gpu() {
     let g = gpu();
     eprintln!("adapter: {}", g.adapter_name());
-    let mut failures: Vec<String> = Vec::new();
     let mut checked = 0usize;
-    for &op in UNARY {
-        let info = conformance::unary_info(op);
-        let acc = accuracy::unary(op);
-        let args: Vec<f64> = conformance::unary_args()
-            .into_iter()
-            .map(|x| acc.tolerance.arg(x))
-            .filter(|&x| acc.holds_at(&[x]))
-            .collect();
+    let mut unary = |op: UnOp, args: &[f64]| -> Vec<f64> {
+        checked += args.len();
         let pts: Vec<[f32; 3]> = args.iter().map(|&a| [a as f32, 0.0, 0.0]).collect();
-        let got = run(
+        run(
             &g,
             |b: &mut Builder| {
                 let x = b.x();
                 b.unary(op, x)
             },
             &pts,
-        );
-        for (&x, &v) in args.iter().zip(&got) {
-            let want = conformance::reference_unary(op, x, acc.tolerance);
-            checked += 1;
-            if !acc.tolerance.agrees(want, v, info.zero_sign) {
-                failures.push(format!("{}({x:e}) = {v:e}, want {want:e}", info.name));
-            }
-        }
-    }
-    for &op in BINARY {
-        let info = conformance::binary_info(op);
-        let acc = accuracy::binary(op);
-        let args: Vec<[f64; 2]> = conformance::binary_args()
-            .into_iter()
-            .map(|[a, b]| [acc.tolerance.arg(a), acc.tolerance.arg(b)])
-            .filter(|p| acc.holds_at(p))
-            .collect();
+        )
+    };
+    let unary_result = conformance::check_unary_each(
+        "gpu",
+        &conformance::unary_args(),
+        &mut unary,
+        &|op| accuracy::unary(op).tolerance,
+        &|op, x| accuracy::unary(op).holds_at(&[x]),
+    );
+    let mut binary = |op: BinOp, args: &[[f64; 2]]| -> Vec<f64> {
+        checked += args.len();
         let pts: Vec<[f32; 3]> = args.iter().map(|&[a, c]| [a as f32, c as f32, 0.0]).collect();
-        let got = run(
+        run(
             &g,
             |b: &mut Builder| {
                 let (x, y) = (b.x(), b.y());
                 b.binary(op, x, y)
             },
             &pts,
-        );
-        for (&[a, c], &v) in args.iter().zip(&got) {
-            let want = conformance::reference_binary(op, a, c, acc.tolerance);
-            checked += 1;
-            if !acc.tolerance.agrees(want, v, info.zero_sign) {
-                failures.push(format!("{}({a:e}, {c:e}) = {v:e}, want {want:e}", info.name));
-            }
-        }
-    }
+        )
+    };
+    let binary_result = conformance::check_binary_each(
+        "gpu",
+        &conformance::binary_args(),
+        &mut binary,
+        &|op| accuracy::binary(op).tolerance,
+        &|op, p| accuracy::binary(op).holds_at(&p),
+    );
     assert!(checked > 1000, "{checked} values checked");
+    let failures: Vec<String> = [unary_result, binary_result]
+        .into_iter()
+        .filter_map(Result::err)
+        .flatten()
+        .map(|m| m.to_string())
+        .collect();
     assert!(
         failures.is_empty(),
-        "{} of {checked} values disagree:\n{}",
+        "{} values disagree:\n{}",
         failures.len(),
         failures.iter().take(40).cloned().collect::<Vec<_>>().join("\n")
     );

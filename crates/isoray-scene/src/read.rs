@@ -33,6 +33,32 @@ pub(crate) struct Build<'a> {
     pub(crate) surface_materials: Vec<(String, usize)>,
 }
 
+/// The entries of a table of named tables (`[material.NAME]`), or the error `message`.
+fn named_tables<'v>(src: &Sources, v: &'v Located, message: &str) -> Result<&'v [Entry]> {
+    match &v.item {
+        Item::Table(entries) => Ok(entries),
+        _ => Err(src.error(v.origin, message, None, &[])),
+    }
+}
+
+/// The tables of an array of tables (`[[key]]`); a single table counts as
+/// one when `single` allows it.
+fn array_of_tables<'v>(src: &Sources, v: &'v Located, key: &str, single: bool) -> Result<Vec<&'v Located>> {
+    match &v.item {
+        Item::Array(items) => Ok(items.iter().collect()),
+        Item::Table(_) if single => Ok(vec![v]),
+        other => Err(src.error(
+            v.origin,
+            format!(
+                "`{key}` must be an array of tables ([[{key}]]), found {}",
+                other.type_name()
+            ),
+            None,
+            &[],
+        )),
+    }
+}
+
 /// A shape-text diagnostic as a scene error at its place in the file (or
 /// the override), with the dotted key of the value it is in.
 fn shape_error_at(src: &Sources, root: &[Entry], snips: &[(&Located, &[usize])], d: Diagnostic) -> SceneError {
@@ -67,6 +93,13 @@ fn shape_error_at(src: &Sources, root: &[Entry], snips: &[(&Located, &[usize])],
 }
 
 impl<'a> Build<'a> {
+    /// Turns shape-text diagnostics into scene errors at their place
+    /// (see [`shape_error_at`]); holds no borrow of `self`.
+    fn shape_errors(&self) -> impl Fn(&[(&Located, &[usize])], Diagnostic) -> SceneError + 'a {
+        let (src, root) = (self.src, self.root);
+        move |snips, d| shape_error_at(src, root, snips, d)
+    }
+
     /// `[params]`: the scene's named parameters, added to the library.
     pub(crate) fn read_params(&mut self, table: Option<&'a Located>) -> Result<Vec<(String, Value)>> {
         let src = self.src;
@@ -74,14 +107,7 @@ impl<'a> Build<'a> {
         let param_ranges = &mut self.param_ranges;
         let mut params = Vec::new();
         if let Some(v) = table {
-            let Item::Table(entries) = &v.item else {
-                return Err(src.error(
-                    v.origin,
-                    "`params` must be a table of named numbers or vectors",
-                    None,
-                    &[],
-                ));
-            };
+            let entries = named_tables(src, v, "`params` must be a table of named numbers or vectors")?;
             for e in entries {
                 let key = format!("params.{}", e.key);
                 let val = param_spec(src, &e.value, &key, param_ranges)?;
@@ -105,8 +131,7 @@ impl<'a> Build<'a> {
     /// `[camera]`, with values that are shape text of `t` and the parameters.
     pub(crate) fn read_camera(&mut self, table: Option<&'a Located>) -> Result<Camera> {
         let src = self.src;
-        let root = self.root;
-        let shape_error = |snips: &[(&Located, &[usize])], d: Diagnostic| shape_error_at(src, root, snips, d);
+        let shape_error = self.shape_errors();
         let lib = &self.lib;
         let snippets = &mut self.snippets;
         let driven = &mut self.driven;
@@ -151,28 +176,14 @@ impl<'a> Build<'a> {
     /// `[[light]]`.
     pub(crate) fn read_lights(&mut self, table: Option<&'a Located>) -> Result<Vec<Light>> {
         let src = self.src;
-        let root = self.root;
-        let shape_error = |snips: &[(&Located, &[usize])], d: Diagnostic| shape_error_at(src, root, snips, d);
+        let shape_error = self.shape_errors();
         let lib = &self.lib;
         let snippets = &mut self.snippets;
         let driven = &mut self.driven;
         let mut lights = Vec::new();
         if let Some(v) = table {
-            let items: Vec<&Located> = match &v.item {
-                Item::Array(items) => items.iter().collect(),
-                Item::Table(_) => vec![v],
-                other => {
-                    return Err(src.error(
-                        v.origin,
-                        format!(
-                            "`light` must be an array of tables ([[light]]), found {}",
-                            other.type_name()
-                        ),
-                        None,
-                        &[],
-                    ))
-                }
-            };
+            // A single `[light]` table is one light.
+            let items = array_of_tables(src, v, "light", true)?;
             for (i, lv) in items.into_iter().enumerate() {
                 let ctx = format!("light.{i}");
                 let resolved = resolve_exprs(src, lib, lv, &ctx, light_keys(), snippets, driven)
@@ -246,22 +257,18 @@ impl<'a> Build<'a> {
     /// `[material.NAME]`: the default material first, then each table.
     pub(crate) fn read_materials(&mut self, table: Option<&'a Located>) -> Result<Vec<Material>> {
         let src = self.src;
-        let root = self.root;
-        let shape_error = |snips: &[(&Located, &[usize])], d: Diagnostic| shape_error_at(src, root, snips, d);
+        let shape_error = self.shape_errors();
         let lib = &self.lib;
         let snippets = &mut self.snippets;
         let driven = &mut self.driven;
         let mut pending_checkers: Vec<(String, String, Located, f64)> = Vec::new();
         let mut materials = vec![Material::default_named("default")];
         if let Some(v) = table {
-            let Item::Table(entries) = &v.item else {
-                return Err(src.error(
-                    v.origin,
-                    "`material` must be a table of named materials ([material.NAME])",
-                    None,
-                    &[],
-                ));
-            };
+            let entries = named_tables(
+                src,
+                v,
+                "`material` must be a table of named materials ([material.NAME])",
+            )?;
             for e in entries {
                 let ctx = format!("material.{}", e.key);
                 let resolved = resolve_exprs(src, lib, &e.value, &ctx, material_keys(), snippets, driven)
@@ -306,21 +313,13 @@ impl<'a> Build<'a> {
     /// `[surface.NAME]`: user surfaces, added to the library and checked.
     pub(crate) fn read_surfaces(&mut self, table: Option<&'a Located>, materials: &[Material]) -> Result<()> {
         let src = self.src;
-        let root = self.root;
-        let shape_error = |snips: &[(&Located, &[usize])], d: Diagnostic| shape_error_at(src, root, snips, d);
+        let shape_error = self.shape_errors();
         let lib = &mut self.lib;
         let snippets = &mut self.snippets;
         let param_ranges = &mut self.param_ranges;
         let surface_materials = &mut self.surface_materials;
         if let Some(v) = table {
-            let Item::Table(entries) = &v.item else {
-                return Err(src.error(
-                    v.origin,
-                    "`surface` must be a table of named surfaces ([surface.NAME])",
-                    None,
-                    &[],
-                ));
-            };
+            let entries = named_tables(src, v, "`surface` must be a table of named surfaces ([surface.NAME])")?;
             for e in entries {
                 let ctx = format!("surface.{}", e.key);
                 check_name(src, &e.key, e.key_origin)?;
@@ -445,8 +444,7 @@ impl<'a> Build<'a> {
         cache: &crate::compile::ObjectCache,
     ) -> Result<Vec<Object>> {
         let src = self.src;
-        let root = self.root;
-        let shape_error = |snips: &[(&Located, &[usize])], d: Diagnostic| shape_error_at(src, root, snips, d);
+        let shape_error = self.shape_errors();
         let lib = &self.lib;
         let snippets = &mut self.snippets;
         let surface_materials = &self.surface_materials;
@@ -455,21 +453,10 @@ impl<'a> Build<'a> {
         match table {
             None => {}
             Some(v) => {
-                let items: Vec<&Located> = match &v.item {
-                    Item::Array(items) => items.iter().collect(),
-                    other => {
-                        return Err(src.error(
-                            v.origin,
-                            format!(
-                                "`object` must be an array of tables ([[object]]), found {}",
-                                other.type_name()
-                            ),
-                            None,
-                            &[],
-                        ))
-                    }
-                };
+                let items = array_of_tables(src, v, "object", false)?;
                 let count = items.len() as u64;
+                // The values exact algebra binds now (the cache checks them).
+                let inputs = lib.input_values();
                 if let Some(p) = lib.progress() {
                     p.stage("objects");
                 }
@@ -537,7 +524,7 @@ impl<'a> Build<'a> {
                     };
                     let key = crate::compile::object_key(lib, text, transform.is_some(), &called);
                     let fragment = cache
-                        .get_or_compile(key, &lib.input_values(), || {
+                        .get_or_compile(key, &inputs, || {
                             let program = match program.take() {
                                 Some(p) => p,
                                 None => isoray_shape::syntax::parse(text, id)?,

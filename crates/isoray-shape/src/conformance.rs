@@ -484,10 +484,24 @@ pub fn check_unary(name: &str, eval: &mut UnaryFn<'_>, tol: Tolerance) -> Result
 
 /// [`check_unary`] on arguments of the caller's choosing.
 pub fn check_unary_on(name: &str, args: &[f64], eval: &mut UnaryFn<'_>, tol: Tolerance) -> Result<(), Vec<Mismatch>> {
-    let args: Vec<f64> = args.iter().map(|&x| tol.arg(x)).collect();
+    check_unary_each(name, args, eval, &|_| tol, &|_, _| true)
+}
+
+/// [`check_unary_on`] with a tolerance per operation (`tol`), each
+/// operation held only at the arguments `held` accepts (after rounding to
+/// its precision): for evaluators whose accuracy differs by operation,
+/// such as a GPU's.
+pub fn check_unary_each(
+    name: &str,
+    args: &[f64],
+    eval: &mut UnaryFn<'_>,
+    tol: &dyn Fn(UnOp) -> Tolerance,
+    held: &dyn Fn(UnOp, f64) -> bool,
+) -> Result<(), Vec<Mismatch>> {
     let mut bad = Vec::new();
     for &op in UNARY {
-        let info = unary_info(op);
+        let (info, tol) = (unary_info(op), tol(op));
+        let args: Vec<f64> = args.iter().map(|&x| tol.arg(x)).filter(|&x| held(op, x)).collect();
         let got = eval(op, &args);
         if got.len() != args.len() {
             bad.push(count_mismatch(name, info.name, args.len(), got.len()));
@@ -524,10 +538,26 @@ pub fn check_binary_on(
     eval: &mut BinaryFn<'_>,
     tol: Tolerance,
 ) -> Result<(), Vec<Mismatch>> {
-    let args: Vec<[f64; 2]> = args.iter().map(|&[a, b]| [tol.arg(a), tol.arg(b)]).collect();
+    check_binary_each(name, args, eval, &|_| tol, &|_, _| true)
+}
+
+/// [`check_binary_on`] with a tolerance per operation, each held only at
+/// the argument pairs `held` accepts (see [`check_unary_each`]).
+pub fn check_binary_each(
+    name: &str,
+    args: &[[f64; 2]],
+    eval: &mut BinaryFn<'_>,
+    tol: &dyn Fn(BinOp) -> Tolerance,
+    held: &dyn Fn(BinOp, [f64; 2]) -> bool,
+) -> Result<(), Vec<Mismatch>> {
     let mut bad = Vec::new();
     for &op in BINARY {
-        let info = binary_info(op);
+        let (info, tol) = (binary_info(op), tol(op));
+        let args: Vec<[f64; 2]> = args
+            .iter()
+            .map(|&[a, b]| [tol.arg(a), tol.arg(b)])
+            .filter(|&p| held(op, p))
+            .collect();
         let got = eval(op, &args);
         if got.len() != args.len() {
             bad.push(count_mismatch(name, info.name, args.len(), got.len()));
