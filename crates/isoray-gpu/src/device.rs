@@ -20,6 +20,9 @@ pub enum GpuError {
     /// A shader did not compile, or a pass failed.
     #[error("GPU: {0}")]
     Gpu(String),
+    /// The render was cancelled.
+    #[error("cancelled")]
+    Cancelled,
 }
 
 /// A GPU device and its queue, with the adapter's description.
@@ -52,8 +55,11 @@ impl Gpu {
         });
         let adapter = adapters.into_iter().next().ok_or(GpuError::NoAdapter)?;
         let info = adapter.get_info();
+        // Timestamp queries time the passes where the adapter has them.
+        let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("isoray"),
+            required_features: features,
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device {
@@ -70,6 +76,24 @@ impl Gpu {
         } else {
             format!("{} ({})", self.info.name, self.info.driver_info)
         }
+    }
+
+    /// Waits for `submission`, then reads the mapped-readable `buffer` as words.
+    pub(crate) fn read_back(
+        &self,
+        buffer: &wgpu::Buffer,
+        submission: wgpu::SubmissionIndex,
+    ) -> Result<Vec<u32>, GpuError> {
+        let slice = buffer.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        self.wait(submission)?;
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Gpu(format!("reading results back: {e}")))?;
+        Ok(view
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect())
     }
 
     /// Waits until the GPU has finished `submission`.

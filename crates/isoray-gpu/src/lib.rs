@@ -15,7 +15,11 @@
 
 pub mod accuracy;
 mod device;
+mod pack;
 mod points;
+mod render;
 
 pub use device::{Gpu, GpuError};
+pub use pack::{interpretable, Kernel, SceneCode};
 pub use points::PointShader;
+pub use render::{band_count, GpuRenderOptions, GpuRenderer, GpuTiming};

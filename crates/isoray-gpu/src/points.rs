@@ -140,15 +140,10 @@ impl Gpu {
         }
         enc.copy_buffer_to_buffer(&out_buf, 0, &read_buf, 0, size);
         let submission = self.queue.submit([enc.finish()]);
-        let slice = read_buf.slice(..);
-        slice.map_async(wgpu::MapMode::Read, |_| {});
-        self.wait(submission)?;
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| GpuError::Gpu(format!("reading results back: {e}")))?;
-        Ok(view
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        Ok(self
+            .read_back(&read_buf, submission)?
+            .into_iter()
+            .map(f32::from_bits)
             .collect())
     }
 }

@@ -109,3 +109,55 @@ fn a_new_parameter_value_is_a_new_buffer_not_a_new_shader() {
     let v = at(&scene);
     assert!((v[0] - 0.5).abs() < 1e-6, "{v:?}");
 }
+
+/// The interpreting kernel's programs give what the compiled functions give.
+#[test]
+fn the_interpreter_agrees_with_the_cpu_on_every_example_object() {
+    use isoray_shape::wgsl::{encode_tape, interpreter, WgslFunction};
+    let g = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
+    let pts = points();
+    let mut files: Vec<_> = std::fs::read_dir(examples())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    for path in files {
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let scene = isoray_scene::load(&path, &[]).unwrap_or_else(|e| panic!("{}", e.rendered));
+        for (i, o) in scene.objects.iter().enumerate() {
+            let tape = o.shape.tape();
+            let prog = encode_tape(tape, 0).unwrap();
+            let words: Vec<String> = prog.code.iter().map(|w| format!("{w}u")).collect();
+            let code = format!(
+                "var<private> iso_code: array<u32, {}> = array<u32, {}>({});\n{}\nfn f(p: vec3<f32>) -> f32 {{ return iso_run(0u, {}u, {}u, p); }}\n",
+                words.len(),
+                words.len(),
+                words.join(", "),
+                interpreter("iso_code", "iso_in"),
+                prog.len(),
+                prog.output
+            );
+            let f = WgslFunction {
+                code,
+                uniform_slots: prog.uniform_slots.clone(),
+            };
+            let shader = g.point_shader(&f, "f").unwrap_or_else(|e| panic!("{name} {i}: {e}"));
+            let gpu = g.eval_points(&shader, &prog.fill(tape, &scene.inputs), &pts).unwrap();
+            let mut cpu = PointEvaluator::<f32>::new(tape);
+            let mut worst = 0.0f64;
+            for (p, &v) in pts.iter().zip(&gpu) {
+                let want = cpu.eval(&scene.inputs, p[0], p[1], p[2]);
+                assert_eq!(
+                    want.is_finite(),
+                    v.is_finite(),
+                    "{name} {i} at {p:?}: gpu {v}, cpu {want}"
+                );
+                if want.is_finite() {
+                    worst = worst.max((v as f64 - want as f64).abs() / (1.0 + (want as f64).abs()));
+                }
+            }
+            assert!(worst < 1e-5, "{name} object {i}: {worst:e}");
+        }
+    }
+}

@@ -195,24 +195,111 @@ impl WgslFunction {
 /// `array<f32>` the caller declares). Each slot is a `var`; a lazy region
 /// is an `if` that skips it where the tape would skip it.
 pub fn emit_tape(tape: &Tape, name: &str, buffer: &str, base: u32) -> WgslFunction {
-    let mut code = format!("fn {name}(p: vec3<f32>) -> f32 {{\n");
+    emit(tape, name, buffer, base, false)
+}
+
+/// Writes `tape`'s value and gradient by forward-mode automatic
+/// differentiation as `fn NAME(p: vec3<f32>) -> vec4<f32>` (x the value,
+/// yzw ∂/∂x, ∂/∂y, ∂/∂z), following the CPU's dual numbers
+/// ([`Dual`](crate::eval::Dual)) rule for rule: the derivative of the
+/// operand `min`/`max` returns, 0 for `floor`, `round` and `sign`, the
+/// derivative of √ taken as 0 where √ is 0. It reads the same buffer
+/// values as [`emit_tape`] (the same [`WgslFunction::uniform_slots`]).
+///
+/// ```
+/// use isoray_shape::{ir::Builder, wgsl};
+/// let mut b = Builder::new();
+/// let (x, y) = (b.x(), b.y());
+/// let d = b.mul(x, y);
+/// let g = wgsl::emit_tape_dual(&b.tape(d), "grad", "iso_in", 0);
+/// assert!(g.code.contains("fn grad(p: vec3<f32>) -> vec4<f32>"));
+/// ```
+pub fn emit_tape_dual(tape: &Tape, name: &str, buffer: &str, base: u32) -> WgslFunction {
+    emit(tape, name, buffer, base, true)
+}
+
+/// The derivative factor k of a unary operation (d(op a) = k·da) as WGSL,
+/// with `a` the argument's value and `v` the result, as [`Dual`](crate::eval::Dual) has it.
+fn unary_slope(op: UnOp, a: &str, v: &str) -> String {
+    match op {
+        UnOp::Neg => "-1.0".into(),
+        UnOp::Abs => format!("select(1.0, -1.0, {a} < 0.0)"),
+        UnOp::Sqrt => format!("select(0.0, 0.5 / {v}, {v} > 0.0)"),
+        UnOp::Square => format!("2.0 * {a}"),
+        UnOp::Sin => format!("cos({a})"),
+        UnOp::Cos => format!("-sin({a})"),
+        UnOp::Tan => format!("1.0 + {v} * {v}"),
+        UnOp::Asin => format!("1.0 / sqrt(1.0 - {a} * {a})"),
+        UnOp::Acos => format!("-1.0 / sqrt(1.0 - {a} * {a})"),
+        UnOp::Atan => format!("1.0 / (1.0 + {a} * {a})"),
+        UnOp::Exp => v.into(),
+        UnOp::Ln => format!("1.0 / {a}"),
+        UnOp::Floor | UnOp::Round | UnOp::Sign => "0.0".into(),
+    }
+}
+
+/// The gradient of a binary operation as WGSL (a `vec3<f32>`), with `a`
+/// and `b` the operands as dual `vec4`s and `v` the result's value.
+fn binary_gradient(op: BinOp, a: &str, b: &str, v: &str) -> String {
+    let lin = |ka: &str, kb: &str| format!("{a}.yzw * ({ka}) + {b}.yzw * ({kb})");
+    match op {
+        BinOp::Add => format!("{a}.yzw + {b}.yzw"),
+        BinOp::Sub => format!("{a}.yzw - {b}.yzw"),
+        BinOp::Mul => lin(&format!("{b}.x"), &format!("{a}.x")),
+        BinOp::Div => lin(&format!("1.0 / {b}.x"), &format!("-{v} / {b}.x")),
+        BinOp::Min => format!("select({a}.yzw, {b}.yzw, {b}.x < {a}.x || iso_is_nan({a}.x))"),
+        BinOp::Max => format!("select({a}.yzw, {b}.yzw, {b}.x > {a}.x || iso_is_nan({a}.x))"),
+        BinOp::Pow => lin(
+            &format!("select({b}.x * iso_pow({a}.x, {b}.x - 1.0), 0.0, {b}.x == 0.0)"),
+            &format!("select(0.0, {v} * iso_ln({a}.x), {a}.x > 0.0)"),
+        ),
+        BinOp::Atan2 => format!(
+            "select(vec3<f32>(0.0), {}, {a}.x * {a}.x + {b}.x * {b}.x > 0.0)",
+            lin(
+                &format!("{b}.x / ({a}.x * {a}.x + {b}.x * {b}.x)"),
+                &format!("-{a}.x / ({a}.x * {a}.x + {b}.x * {b}.x)"),
+            )
+        ),
+    }
+}
+
+fn emit(tape: &Tape, name: &str, buffer: &str, base: u32, dual: bool) -> WgslFunction {
+    let (ty, ret) = if dual {
+        ("vec4<f32>", "vec4<f32>")
+    } else {
+        ("f32", "f32")
+    };
+    let mut code = format!("fn {name}(p: vec3<f32>) -> {ret} {{\n");
     let slots = tape.slots();
     let s = |k: u32| format!("s{k}");
+    let val = |k: u32| if dual { format!("s{k}.x") } else { format!("s{k}") };
+    let constant = |e: String| {
+        if dual {
+            format!("vec4<f32>({e}, 0.0, 0.0, 0.0)")
+        } else {
+            e
+        }
+    };
     for k in 0..slots {
-        code.push_str(&format!("    var s{k}: f32;\n"));
+        code.push_str(&format!("    var s{k}: {ty};\n"));
     }
-    code.push_str("    s0 = p.x;\n    s1 = p.y;\n    s2 = p.z;\n");
+    if dual {
+        code.push_str(
+            "    s0 = vec4<f32>(p.x, 1.0, 0.0, 0.0);\n    s1 = vec4<f32>(p.y, 0.0, 1.0, 0.0);\n    \
+             s2 = vec4<f32>(p.z, 0.0, 0.0, 1.0);\n",
+        );
+    } else {
+        code.push_str("    s0 = p.x;\n    s1 = p.y;\n    s2 = p.z;\n");
+    }
     for &(slot, v) in tape.constants() {
-        code.push_str(&format!("    s{slot} = {};\n", literal(v)));
+        code.push_str(&format!("    s{slot} = {};\n", constant(literal(v))));
     }
     let mut uniform_slots = Vec::new();
     let mut seen = std::collections::HashSet::new();
     for &(_, slot) in tape.prologue().outputs() {
         if seen.insert(slot) {
-            code.push_str(&format!(
-                "    s{slot} = {buffer}[{}];\n",
-                base + uniform_slots.len() as u32
-            ));
+            let e = format!("{buffer}[{}]", base + uniform_slots.len() as u32);
+            code.push_str(&format!("    s{slot} = {};\n", constant(e)));
             uniform_slots.push(slot);
         }
     }
@@ -229,9 +316,28 @@ pub fn emit_tape(tape: &Tape, name: &str, buffer: &str, base: u32) -> WgslFuncti
         let pad = "    ".repeat(depth);
         match *ins {
             Instr::Skip { c, len } => {
-                code.push_str(&format!("{pad}if (!({} > 0.0)) {{\n", s(c)));
+                code.push_str(&format!("{pad}if (!({} > 0.0)) {{\n", val(c)));
                 ends.push(k + 1 + len as usize);
                 depth += 1;
+            }
+            Instr::Unary { op, out, a } if dual => {
+                let v = unary(op, &val(a));
+                let slope = unary_slope(op, "a.x", "v");
+                code.push_str(&format!(
+                    "{pad}{{ let a = {}; let v = {v}; {} = vec4<f32>(v, a.yzw * ({slope})); }}\n",
+                    s(a),
+                    s(out)
+                ));
+            }
+            Instr::Binary { op, out, a, b } if dual => {
+                let v = binary(op, "a.x", "b.x");
+                let g = binary_gradient(op, "a", "b", "v");
+                code.push_str(&format!(
+                    "{pad}{{ let a = {}; let b = {}; let v = {v}; {} = vec4<f32>(v, {g}); }}\n",
+                    s(a),
+                    s(b),
+                    s(out)
+                ));
             }
             Instr::Unary { op, out, a } => {
                 code.push_str(&format!("{pad}{} = {};\n", s(out), unary(op, &s(a))));
@@ -245,7 +351,7 @@ pub fn emit_tape(tape: &Tape, name: &str, buffer: &str, base: u32) -> WgslFuncti
                     s(out),
                     s(b),
                     s(a),
-                    s(c)
+                    val(c)
                 ));
             }
         }
@@ -256,4 +362,209 @@ pub fn emit_tape(tape: &Tape, name: &str, buffer: &str, base: u32) -> WgslFuncti
     }
     code.push_str(&format!("    return s{};\n}}\n", tape.output()));
     WgslFunction { code, uniform_slots }
+}
+
+/// The largest slot count a tape may have to run on [`interpreter`]
+/// (its registers are a private array of this size).
+pub const MAX_INTERPRETED_SLOTS: usize = 256;
+
+/// Opcode of the first binary operation (`32 + position in BINARY`);
+/// unary operations are their position in [`UNARY`](crate::conformance::UNARY).
+const BINARY_BASE: u32 = 32;
+/// `out = c > 0 ? a : b` (operands c, a, b).
+const OP_SELECT: u32 = 64;
+/// Skip the next `len` instructions when c > 0 (operands c, len).
+const OP_SKIP: u32 = 65;
+/// `out = f32::from_bits(w1)`.
+const OP_CONST: u32 = 66;
+/// `out = INPUTS[w1]`.
+const OP_INPUT: u32 = 67;
+
+fn unary_code(op: UnOp) -> u32 {
+    crate::conformance::UNARY
+        .iter()
+        .position(|&o| o == op)
+        .expect("every unary operation is listed") as u32
+}
+
+fn binary_code(op: BinOp) -> u32 {
+    BINARY_BASE
+        + crate::conformance::BINARY
+            .iter()
+            .position(|&o| o == op)
+            .expect("every binary operation is listed") as u32
+}
+
+/// A tape as the program of the WGSL [`interpreter`]: four words per
+/// instruction (`op | out << 8`, then up to three operands), the constants
+/// and the input-buffer reads first, then the tape's instructions one for one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Program {
+    /// The instructions, four words each.
+    pub code: Vec<u32>,
+    /// The slot holding the result.
+    pub output: u32,
+    /// Slots used (registers needed).
+    pub slots: usize,
+    /// As [`WgslFunction::uniform_slots`]: the tape slot whose prologue
+    /// value goes to `INPUTS[base + k]`.
+    pub uniform_slots: Vec<u32>,
+}
+
+impl Program {
+    /// Instructions (four words each).
+    pub fn len(&self) -> usize {
+        self.code.len() / 4
+    }
+
+    /// True for a program of no instructions.
+    pub fn is_empty(&self) -> bool {
+        self.code.is_empty()
+    }
+
+    /// The program's part of the input buffer at the inputs `vars` (as [`WgslFunction::fill`]).
+    pub fn fill(&self, tape: &Tape, vars: &[f64]) -> Vec<f32> {
+        WgslFunction {
+            code: String::new(),
+            uniform_slots: self.uniform_slots.clone(),
+        }
+        .fill(tape, vars)
+    }
+}
+
+/// Encodes `tape` for the [`interpreter`], its inputs read from
+/// `INPUTS[base + k]`. None when it has more than
+/// [`MAX_INTERPRETED_SLOTS`] slots.
+pub fn encode_tape(tape: &Tape, base: u32) -> Option<Program> {
+    if tape.slots() > MAX_INTERPRETED_SLOTS {
+        return None;
+    }
+    let mut code = Vec::new();
+    let mut put = |op: u32, out: u32, w: [u32; 3]| code.extend([op | out << 8, w[0], w[1], w[2]]);
+    for &(slot, v) in tape.constants() {
+        put(OP_CONST, slot, [(v as f32).to_bits(), 0, 0]);
+    }
+    let mut uniform_slots = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    for &(_, slot) in tape.prologue().outputs() {
+        if seen.insert(slot) {
+            put(OP_INPUT, slot, [base + uniform_slots.len() as u32, 0, 0]);
+            uniform_slots.push(slot);
+        }
+    }
+    for ins in tape.instrs() {
+        match *ins {
+            Instr::Skip { c, len } => put(OP_SKIP, 0, [c, len, 0]),
+            Instr::Unary { op, out, a } => put(unary_code(op), out, [a, 0, 0]),
+            Instr::Binary { op, out, a, b } => put(binary_code(op), out, [a, b, 0]),
+            Instr::Select { out, c, a, b } => put(OP_SELECT, out, [c, a, b]),
+        }
+    }
+    Some(Program {
+        code,
+        output: tape.output() as u32,
+        slots: tape.slots(),
+        uniform_slots,
+    })
+}
+
+/// A WGSL interpreter of [`Program`]s read from the `array<u32>` named
+/// `code` (the caller declares it and `inputs`, an `array<f32>`):
+/// `fn iso_run(start: u32, len: u32, out: u32, p: vec3<f32>) -> f32` runs
+/// the `len` instructions from word `start` on the point and returns slot
+/// `out`; `iso_run_dual` does the same with dual numbers (value and
+/// gradient, as [`emit_tape_dual`]). Every operation's case is written
+/// from [`unary`] and [`binary`], the same code the compiled functions use.
+pub fn interpreter(code: &str, inputs: &str) -> String {
+    let mut value_cases = String::new();
+    let mut dual_cases = String::new();
+    for &op in crate::conformance::UNARY {
+        let k = unary_code(op);
+        value_cases.push_str(&format!(
+            "            case {k}u: {{ v = {}; }}\n",
+            unary(op, "iso_regs[a]")
+        ));
+        dual_cases.push_str(&format!(
+            "            case {k}u: {{ let x = iso_dregs[a]; let v = {}; r = vec4<f32>(v, x.yzw * ({})); }}\n",
+            unary(op, "x.x"),
+            unary_slope(op, "x.x", "v")
+        ));
+    }
+    for &op in crate::conformance::BINARY {
+        let k = binary_code(op);
+        value_cases.push_str(&format!(
+            "            case {k}u: {{ v = {}; }}\n",
+            binary(op, "iso_regs[a]", "iso_regs[b]")
+        ));
+        dual_cases.push_str(&format!(
+            "            case {k}u: {{ let x = iso_dregs[a]; let y = iso_dregs[b]; let v = {}; r = vec4<f32>(v, {}); }}\n",
+            binary(op, "x.x", "y.x"),
+            binary_gradient(op, "x", "y", "v")
+        ));
+    }
+    format!(
+        r#"var<private> iso_regs: array<f32, {MAX_INTERPRETED_SLOTS}>;
+var<private> iso_dregs: array<vec4<f32>, {MAX_INTERPRETED_SLOTS}>;
+fn iso_run(start: u32, len: u32, out: u32, p: vec3<f32>) -> f32 {{
+    iso_regs[0] = p.x;
+    iso_regs[1] = p.y;
+    iso_regs[2] = p.z;
+    var pc = start;
+    let end = start + 4u * len;
+    while (pc < end) {{
+        let w0 = {code}[pc];
+        let op = w0 & 0xffu;
+        let o = w0 >> 8u;
+        let a = {code}[pc + 1u];
+        let b = {code}[pc + 2u];
+        let c = {code}[pc + 3u];
+        pc += 4u;
+        var v = 0.0;
+        var write = true;
+        switch op {{
+{value_cases}            case {OP_SELECT}u: {{ v = select(iso_regs[c], iso_regs[b], iso_regs[a] > 0.0); }}
+            case {OP_SKIP}u: {{
+                write = false;
+                if (iso_regs[a] > 0.0) {{ pc += 4u * b; }}
+            }}
+            case {OP_CONST}u: {{ v = bitcast<f32>(a); }}
+            case {OP_INPUT}u: {{ v = {inputs}[a]; }}
+            default: {{ write = false; }}
+        }}
+        if (write) {{ iso_regs[o] = v; }}
+    }}
+    return iso_regs[out];
+}}
+fn iso_run_dual(start: u32, len: u32, out: u32, p: vec3<f32>) -> vec4<f32> {{
+    iso_dregs[0] = vec4<f32>(p.x, 1.0, 0.0, 0.0);
+    iso_dregs[1] = vec4<f32>(p.y, 0.0, 1.0, 0.0);
+    iso_dregs[2] = vec4<f32>(p.z, 0.0, 0.0, 1.0);
+    var pc = start;
+    let end = start + 4u * len;
+    while (pc < end) {{
+        let w0 = {code}[pc];
+        let op = w0 & 0xffu;
+        let o = w0 >> 8u;
+        let a = {code}[pc + 1u];
+        let b = {code}[pc + 2u];
+        let c = {code}[pc + 3u];
+        pc += 4u;
+        var r = vec4<f32>(0.0);
+        var write = true;
+        switch op {{
+{dual_cases}            case {OP_SELECT}u: {{ r = select(iso_dregs[c], iso_dregs[b], iso_dregs[a].x > 0.0); }}
+            case {OP_SKIP}u: {{
+                write = false;
+                if (iso_dregs[a].x > 0.0) {{ pc += 4u * b; }}
+            }}
+            case {OP_CONST}u: {{ r = vec4<f32>(bitcast<f32>(a), 0.0, 0.0, 0.0); }}
+            case {OP_INPUT}u: {{ r = vec4<f32>({inputs}[a], 0.0, 0.0, 0.0); }}
+            default: {{ write = false; }}
+        }}
+        if (write) {{ iso_dregs[o] = r; }}
+    }}
+    return iso_dregs[out];
+}}
+"#
+    )
 }

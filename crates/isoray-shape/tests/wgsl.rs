@@ -165,3 +165,59 @@ fn real_shapes_have_valid_wgsl_and_their_inputs_in_the_buffer() {
     assert!(base > 0, "the shapes read parameters and the time");
     validate(&module(&fns, base as usize));
 }
+
+/// The dual (gradient) form of every operation, of lazy regions and of a
+/// real shape is valid WGSL, and reads the buffer as the value form does.
+#[test]
+fn every_operation_has_a_valid_gradient() {
+    let mut fns = Vec::new();
+    let mut tapes = Vec::new();
+    for &op in UNARY {
+        let mut b = Builder::new();
+        let x = b.x();
+        let n = b.unary(op, x);
+        tapes.push(b.tape(n));
+    }
+    for &op in BINARY {
+        let mut b = Builder::new();
+        let (x, r) = (b.x(), b.input(1));
+        let n = b.binary(op, x, r);
+        tapes.push(b.tape(n));
+    }
+    let mut b = Builder::new();
+    let (x, y) = (b.x(), b.y());
+    let far = b.add_c(x, -2.0);
+    let e = b.mul(x, y);
+    let out = b.lazy_select(far, x, e);
+    tapes.push(b.tape(out));
+    let lib = Library::new();
+    let mut b = Builder::new();
+    let node = lib
+        .compile(
+            &mut b,
+            "smooth_union(sphere(p, 1.0), box(rotate_y(p, 0.3), vec3(0.5)), 0.2)",
+            0,
+        )
+        .unwrap();
+    tapes.push(b.tape(node));
+    for (k, tape) in tapes.iter().enumerate() {
+        let v = emit_tape(tape, &format!("v{k}"), "iso_in", 0);
+        let g = wgsl::emit_tape_dual(tape, &format!("g{k}"), "iso_in", 0);
+        assert_eq!(v.uniform_slots, g.uniform_slots);
+        fns.push((format!("g{k}"), g.code.clone()));
+    }
+    let mut m = String::from(PRELUDE);
+    m.push_str(
+        "@group(0) @binding(0) var<storage, read> iso_in: array<f32, 1>;\n\
+         @group(0) @binding(1) var<storage, read_write> out: array<vec4<f32>>;\n",
+    );
+    let mut body = String::new();
+    for (k, (name, code)) in fns.iter().enumerate() {
+        m.push_str(code);
+        body.push_str(&format!("    out[{k}u] = {name}(p);\n"));
+    }
+    m.push_str(&format!(
+        "@compute @workgroup_size(1)\nfn main() {{\n    let p = vec3<f32>(0.5, 0.25, -0.25);\n{body}}}\n"
+    ));
+    validate(&m);
+}

@@ -2,6 +2,10 @@
 
 mod algebra_cmd;
 mod compare;
+#[cfg(feature = "gpu")]
+mod gpu_cmd;
+#[cfg(feature = "gpu")]
+use gpu_cmd::render_gpu;
 mod jobs;
 mod mesh_cmd;
 mod raster_cmd;
@@ -23,6 +27,15 @@ use isoray_scene::{load_with, LoadOptions, Scene, SceneError};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+}
+
+/// Which renderer `isoray render` uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Backend {
+    /// The CPU sphere tracer (isoray-render).
+    Cpu,
+    /// The GPU sphere tracer (isoray-gpu, through wgpu and Vulkan).
+    Gpu,
 }
 
 #[derive(Subcommand)]
@@ -58,6 +71,14 @@ enum Command {
         /// No progress bar and no summary.
         #[arg(short, long)]
         quiet: bool,
+        /// The renderer: the CPU sphere tracer, or the same on the GPU
+        /// (a build with `--features gpu` and a Vulkan driver).
+        #[arg(long, value_enum, default_value = "cpu")]
+        backend: Backend,
+        /// With `--backend gpu`: print the GPU time of each pass
+        /// (timestamp queries) and the pipeline build time.
+        #[arg(long)]
+        timing: bool,
     },
     /// Read points `x y z` from stdin and print the scene's signed distance at each.
     Eval {
@@ -322,6 +343,8 @@ fn main() -> ExitCode {
             albedo,
             threads,
             quiet,
+            backend,
+            timing,
         } => {
             let mut overrides = Vec::new();
             overrides.extend(width.map(|w| format!("render.width={w}")));
@@ -333,7 +356,13 @@ fn main() -> ExitCode {
                 normals: normals.as_deref(),
                 albedo: albedo.as_deref(),
             };
-            cmd_render(&input, &overrides, &outputs, threads, quiet)
+            let how = HowToRender {
+                threads,
+                quiet,
+                backend,
+                timing,
+            };
+            cmd_render(&input, &overrides, &outputs, &how)
         }
         Command::Eval { input } => cmd_eval(&input),
         Command::Groebner {
@@ -535,13 +564,71 @@ struct Outputs<'a> {
     albedo: Option<&'a Path>,
 }
 
-fn cmd_render(
-    input: &SceneArgs,
-    overrides: &[String],
-    outputs: &Outputs,
+/// How `isoray render` runs: threads, output on the terminal, backend.
+struct HowToRender {
     threads: Option<usize>,
     quiet: bool,
-) -> Result<(), Failure> {
+    backend: Backend,
+    timing: bool,
+}
+
+/// A finished render and what the summary line says of it.
+pub(crate) struct Rendered {
+    pub(crate) image: isoray_render::RenderedImage,
+    pub(crate) stats: isoray_render::Stats,
+    pub(crate) elapsed: f64,
+    /// `cpu (2 threads)` or `gpu llvmpipe (…)`.
+    pub(crate) backend: String,
+}
+
+/// Renders on the CPU with a progress bar.
+fn render_cpu(scene: &Scene, aovs: bool, threads: Option<usize>, quiet: bool) -> Result<Rendered, Failure> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| io_failure(format!("cannot start worker threads: {e}")))?;
+    let progress = Arc::new(Counter::default());
+    let opts = RenderOptions {
+        aovs,
+        progress: Some(progress.clone()),
+        cancel: Some(jobs::cancel_token()),
+    };
+    let start = Instant::now();
+    let result = std::thread::scope(|sc| {
+        let handle = sc.spawn(|| pool.install(|| render_with(scene, &opts)));
+        if !quiet {
+            show_progress(&handle, &progress, tile_count(scene), start);
+        }
+        handle.join()
+    })
+    .map_err(|_| io_failure("the renderer failed unexpectedly".into()))?;
+    let Ok((image, stats)) = result else {
+        return Err(jobs::cancelled());
+    };
+    let n = pool.current_num_threads();
+    Ok(Rendered {
+        image,
+        stats,
+        elapsed: start.elapsed().as_secs_f64(),
+        backend: format!("cpu ({n} thread{})", if n == 1 { "" } else { "s" }),
+    })
+}
+
+#[cfg(not(feature = "gpu"))]
+fn render_gpu(_scene: &Scene, _aovs: bool, _timing: bool, _quiet: bool) -> Result<Rendered, Failure> {
+    Err(io_failure(
+        "this isoray was built without the GPU backend; build it with `cargo build --release -p isoray --features gpu`"
+            .into(),
+    ))
+}
+
+fn cmd_render(input: &SceneArgs, overrides: &[String], outputs: &Outputs, how: &HowToRender) -> Result<(), Failure> {
+    let &HowToRender {
+        threads,
+        quiet,
+        backend,
+        timing,
+    } = how;
     let Outputs {
         png: out,
         depth,
@@ -559,30 +646,20 @@ fn cmd_render(
     if threads == Some(0) {
         return Err(usage("--threads must be at least 1".into()));
     }
+    if timing && backend != Backend::Gpu {
+        return Err(usage("--timing needs --backend gpu".into()));
+    }
     let scene = input.load(overrides)?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()
-        .map_err(|e| io_failure(format!("cannot start worker threads: {e}")))?;
-    let progress = Arc::new(Counter::default());
-    let opts = RenderOptions {
-        aovs: depth.is_some() || normals.is_some() || albedo.is_some(),
-        progress: Some(progress.clone()),
-        cancel: Some(jobs::cancel_token()),
+    let aovs = depth.is_some() || normals.is_some() || albedo.is_some();
+    let Rendered {
+        image,
+        stats,
+        elapsed,
+        backend,
+    } = match backend {
+        Backend::Cpu => render_cpu(&scene, aovs, threads, quiet)?,
+        Backend::Gpu => render_gpu(&scene, aovs, timing, quiet)?,
     };
-    let start = Instant::now();
-    let result = std::thread::scope(|sc| {
-        let handle = sc.spawn(|| pool.install(|| render_with(&scene, &opts)));
-        if !quiet {
-            show_progress(&handle, &progress, tile_count(&scene), start);
-        }
-        handle.join()
-    })
-    .map_err(|_| io_failure("the renderer failed unexpectedly".into()))?;
-    let Ok((image, stats)) = result else {
-        return Err(jobs::cancelled());
-    };
-    let elapsed = start.elapsed().as_secs_f64();
     let w = |r: Result<(), output::OutputError>| r.map_err(|e| io_failure(e.to_string()));
     w(output::write_png(out, image.width, image.height, &image.color))?;
     if let (Some(p), Some(d)) = (depth, &image.depth) {
@@ -595,7 +672,7 @@ fn cmd_render(
         w(output::write_exr_rgb(p, image.width, image.height, a))?;
     }
     if !quiet {
-        summary(&scene, &stats, elapsed, out);
+        summary(&scene, &stats, elapsed, &backend, out);
     }
     if stats.overshoots > 0 {
         let names: Vec<String> = (0..scene.objects.len())
@@ -619,7 +696,12 @@ fn cmd_render(
     Ok(())
 }
 
-fn show_progress<T>(handle: &std::thread::ScopedJoinHandle<'_, T>, done: &Counter, total: usize, start: Instant) {
+pub(crate) fn show_progress<T>(
+    handle: &std::thread::ScopedJoinHandle<'_, T>,
+    done: &Counter,
+    total: usize,
+    start: Instant,
+) {
     let mut bar: Option<indicatif::ProgressBar> = None;
     while !handle.is_finished() {
         std::thread::sleep(Duration::from_millis(50));
@@ -643,11 +725,11 @@ fn show_progress<T>(handle: &std::thread::ScopedJoinHandle<'_, T>, done: &Counte
     }
 }
 
-fn summary(scene: &Scene, stats: &isoray_render::Stats, secs: f64, out: &Path) {
+fn summary(scene: &Scene, stats: &isoray_render::Stats, secs: f64, backend: &str, out: &Path) {
     let r = &scene.render;
     let secs = secs.max(1e-9);
     eprintln!(
-        "rendered {}x{} (aa {}, {} primary rays) in {:.2} s: {:.2} M primary rays/s, {:.1} M distance evaluations/s -> {}",
+        "rendered {}x{} (aa {}, {} primary rays) on {backend} in {:.2} s: {:.2} M primary rays/s, {:.1} M distance evaluations/s -> {}",
         r.width,
         r.height,
         r.aa,

@@ -605,3 +605,38 @@ fn ctrl_c_stops_a_raster_inside_its_maps_or_shading() {
     // Milliseconds in practice (per triangle, texel and pixel); generous for a loaded machine.
     assert!(waited < std::time::Duration::from_secs(2), "{waited:?}");
 }
+
+/// `--backend gpu` names the backend in the summary; a build without the
+/// GPU feature says how to get one; `--timing` needs the GPU backend.
+#[test]
+fn the_backend_flag() {
+    let out = tmp("backend.png");
+    let scene = examples().join("csg.toml");
+    let o = run(isoray()
+        .arg("render")
+        .arg(&scene)
+        .args(["--width", "32", "--height", "18", "-o"])
+        .arg(&out));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains(" on cpu ("), "{}", stderr(&o));
+    let o = run(isoray()
+        .arg("render")
+        .arg(&scene)
+        .args(["--width", "32", "--height", "18", "--timing", "-o"])
+        .arg(&out));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--timing needs --backend gpu"), "{}", stderr(&o));
+    let o = run(isoray()
+        .arg("render")
+        .arg(&scene)
+        .args(["--width", "32", "--height", "18", "--backend", "gpu", "--timing", "-o"])
+        .arg(&out));
+    if cfg!(feature = "gpu") {
+        assert!(o.status.success(), "{}", stderr(&o));
+        let e = stderr(&o);
+        assert!(e.contains(" on gpu ") && e.contains("timing: "), "{e}");
+    } else {
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(stderr(&o).contains("--features gpu"), "{}", stderr(&o));
+    }
+}

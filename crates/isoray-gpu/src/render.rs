@@ -1,0 +1,412 @@
+//! The GPU renderer: `isoray render --backend gpu`.
+//!
+//! One compute pipeline per scene structure: the objects' generated WGSL
+//! and the tracer (`render.wgsl`). Everything else (parameters, time,
+//! placements, lights, materials, settings, camera, environment) goes in
+//! buffers written for each frame, so only a structural edit (a changed
+//! shape text) builds a new pipeline; [`GpuRenderer::prepare`] says when
+//! it did and how long it took.
+//!
+//! The image is drawn in bands of rows, one dispatch each, so that a render
+//! can be cancelled between bands and reports progress per band.
+
+use std::time::{Duration, Instant};
+
+use isoray_job::{CancelToken, Progress};
+use isoray_render::{RayCounts, RenderedImage, Stats};
+use isoray_scene::Scene;
+use wgpu::util::DeviceExt;
+
+use crate::pack::{self, Band, Kernel, SceneCode, Words};
+use crate::{Gpu, GpuError};
+
+/// Pixels per dispatch at most (bands of whole rows).
+const BAND_PIXELS: u32 = 1 << 18;
+
+/// The rows of one band of a `width`-pixel-wide image.
+fn band_rows(width: u32, height: u32) -> u32 {
+    (BAND_PIXELS / width.max(1)).clamp(1, height.max(1))
+}
+
+/// How many bands (dispatches, progress steps) a `width`×`height` image takes.
+pub fn band_count(width: u32, height: u32) -> usize {
+    height.div_ceil(band_rows(width, height)) as usize
+}
+
+/// What to compute besides the colour, and the job's control.
+#[derive(Default)]
+pub struct GpuRenderOptions {
+    /// Compute the depth, normal and albedo AOVs.
+    pub aovs: bool,
+    /// Told (bands done, bands in all) after each band.
+    pub progress: Option<std::sync::Arc<dyn Progress + Send>>,
+    /// Stops the render at the next band ([`GpuError::Cancelled`]).
+    pub cancel: Option<CancelToken>,
+    /// Measure each band's GPU time with timestamp queries (where the
+    /// adapter has them).
+    pub timing: bool,
+    /// The kernel; None chooses ([`Kernel::choose`]).
+    pub kernel: Option<Kernel>,
+}
+
+/// What a frame cost.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GpuTiming {
+    /// Time to build the pipeline before this frame (a structural change),
+    /// or None when the cached one was used.
+    pub pipeline_build: Option<Duration>,
+    /// The GPU time of each band's pass (timestamp queries), in
+    /// milliseconds; empty when not asked for or not available.
+    pub passes_ms: Vec<f64>,
+    /// Wall time of the frame on the host: upload, dispatches, read-back.
+    pub wall: Duration,
+    /// The kernel that drew it.
+    pub kernel: Option<Kernel>,
+}
+
+impl GpuTiming {
+    /// The GPU time of the whole frame (sum of the passes), in milliseconds.
+    pub fn gpu_ms(&self) -> Option<f64> {
+        (!self.passes_ms.is_empty()).then(|| self.passes_ms.iter().sum())
+    }
+}
+
+struct Program {
+    code: SceneCode,
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
+/// Renders scenes on a [`Gpu`], keeping the pipeline of the last scene
+/// structure it saw.
+pub struct GpuRenderer {
+    gpu: Gpu,
+    program: Option<Program>,
+}
+
+impl std::fmt::Debug for GpuRenderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GpuRenderer")
+            .field("adapter", &self.gpu.adapter_name())
+            .field("pipeline", &self.program.is_some())
+            .finish()
+    }
+}
+
+impl GpuRenderer {
+    /// A renderer on the first adapter [`Gpu::new`] finds.
+    pub fn new() -> Result<GpuRenderer, GpuError> {
+        Ok(GpuRenderer::with_gpu(Gpu::new()?))
+    }
+
+    /// A renderer on `gpu`.
+    pub fn with_gpu(gpu: Gpu) -> GpuRenderer {
+        GpuRenderer { gpu, program: None }
+    }
+
+    /// The device.
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    /// Makes the pipeline for the scene's structure ready: returns the time
+    /// it took to build one, or None when the cached pipeline fits (the
+    /// objects' shapes are the same; inputs and settings may differ).
+    pub fn prepare(&mut self, scene: &Scene, kernel: Kernel) -> Result<Option<Duration>, GpuError> {
+        let code = SceneCode::new(scene, kernel).map_err(GpuError::Gpu)?;
+        if let Some(p) = self.program.as_mut().filter(|p| p.code.source == code.source) {
+            p.code = code;
+            return Ok(None);
+        }
+        let start = Instant::now();
+        let program = self.build(code)?;
+        self.program = Some(program);
+        Ok(Some(start.elapsed()))
+    }
+
+    fn build(&self, code: SceneCode) -> Result<Program, GpuError> {
+        let device = &self.gpu.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("isoray tracer"),
+            source: wgpu::ShaderSource::Wgsl(code.source.as_str().into()),
+        });
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let read = wgpu::BufferBindingType::Storage { read_only: true };
+        let write = wgpu::BufferBindingType::Storage { read_only: false };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("tracer"),
+            entries: &[
+                entry(0, read),
+                entry(1, wgpu::BufferBindingType::Uniform),
+                entry(2, read),
+                entry(3, read),
+                entry(4, read),
+                entry(5, read),
+                entry(6, write),
+                entry(7, write),
+                entry(8, read),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("tracer"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("tracer"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Gpu(format!("the scene's shader did not compile: {e}")));
+        }
+        Ok(Program { code, pipeline, layout })
+    }
+
+    /// Renders the whole image of the scene (as [`isoray_render::render_with`]
+    /// does on the CPU), building the pipeline first when the scene's
+    /// structure changed.
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        opts: &GpuRenderOptions,
+    ) -> Result<(RenderedImage, Stats, GpuTiming), GpuError> {
+        let start = Instant::now();
+        let kernel = opts.kernel.unwrap_or_else(|| Kernel::choose(scene));
+        let pipeline_build = self.prepare(scene, kernel)?;
+        let program = self.program.as_ref().expect("prepared");
+        let gpu = &self.gpu;
+        let device = &gpu.device;
+        let (w, h) = (scene.render.width, scene.render.height);
+        let storage = |label: &str, words: &Words| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &words.bytes(),
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let inputs = Words(program.code.inputs(scene).iter().map(|x| x.to_bits()).collect());
+        let in_buf = storage("iso_in", &inputs);
+        let lights = storage("lights", &pack::lights(scene));
+        let mats = storage("materials", &pack::materials(scene));
+        let objs = storage("objects", &program.code.objects(scene));
+        let code_buf = storage("programs", &Words(program.code.code.clone()));
+        let env = storage("environment", &{
+            let mut e = pack::environment(scene);
+            if e.0.is_empty() {
+                e.0.push(0);
+            }
+            e
+        });
+        let stats_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("stats"),
+            contents: &[0u8; 48],
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        });
+        let timestamps = opts.timing && device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let rows = band_rows(w, h);
+        let bands: Vec<Band> = (0..h.div_ceil(rows))
+            .map(|b| Band {
+                x0: 0,
+                y0: b * rows,
+                width: w,
+                height: rows.min(h - b * rows),
+            })
+            .collect();
+        let record = if opts.aovs {
+            pack::RECORD_AOVS
+        } else {
+            pack::RECORD_COLOUR
+        } as usize;
+        let n = (w * h) as usize;
+        let mut image = RenderedImage {
+            width: w,
+            height: h,
+            color: vec![[0.0; 3]; n],
+            depth: opts.aovs.then(|| vec![f32::INFINITY; n]),
+            normals: opts.aovs.then(|| vec![[0.0; 3]; n]),
+            albedo: opts.aovs.then(|| vec![[0.0; 3]; n]),
+        };
+        let mut passes_ms = Vec::new();
+        for (bi, band) in bands.iter().enumerate() {
+            if opts.cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
+                return Err(GpuError::Cancelled);
+            }
+            let cfg = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("settings"),
+                contents: &pack::settings(scene, *band, opts.aovs).bytes(),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let size = (band.width as usize * band.height as usize * record * 4) as u64;
+            let out_buf = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("out"),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let read_buf = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("read-back"),
+                size,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            let buffers = [
+                &in_buf, &cfg, &lights, &mats, &objs, &env, &out_buf, &stats_buf, &code_buf,
+            ];
+            let entries: Vec<wgpu::BindGroupEntry> = buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("tracer"),
+                layout: &program.layout,
+                entries: &entries,
+            });
+            let query = timestamps.then(|| Queries::new(device));
+            let mut enc = device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("trace"),
+                    timestamp_writes: query.as_ref().map(|q| wgpu::ComputePassTimestampWrites {
+                        query_set: &q.set,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: Some(1),
+                    }),
+                });
+                pass.set_pipeline(&program.pipeline);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.dispatch_workgroups(band.width.div_ceil(8), band.height.div_ceil(8), 1);
+            }
+            enc.copy_buffer_to_buffer(&out_buf, 0, &read_buf, 0, size);
+            if let Some(q) = &query {
+                q.resolve(&mut enc);
+            }
+            let submission = gpu.queue.submit([enc.finish()]);
+            let words = gpu.read_back(&read_buf, submission)?;
+            if let Some(q) = &query {
+                passes_ms.push(q.elapsed_ms(gpu)?);
+            }
+            for (k, rec) in words.chunks_exact(record).enumerate() {
+                let f = |i: usize| f32::from_bits(rec[i]);
+                let idx = (band.y0 as usize + k / band.width as usize) * w as usize + k % band.width as usize;
+                image.color[idx] = [f(0), f(1), f(2)];
+                if opts.aovs {
+                    image.depth.as_mut().expect("aovs")[idx] = f(3);
+                    image.normals.as_mut().expect("aovs")[idx] = [f(4), f(5), f(6)];
+                    image.albedo.as_mut().expect("aovs")[idx] = [f(7), f(8), f(9)];
+                }
+            }
+            if let Some(p) = &opts.progress {
+                p.update(bi as u64 + 1, bands.len() as u64);
+            }
+        }
+        let stats = self.read_stats(scene, &stats_buf)?;
+        let timing = GpuTiming {
+            pipeline_build,
+            passes_ms,
+            wall: start.elapsed(),
+            kernel: Some(kernel),
+        };
+        Ok((image, stats, timing))
+    }
+
+    fn read_stats(&self, scene: &Scene, stats_buf: &wgpu::Buffer) -> Result<Stats, GpuError> {
+        let gpu = &self.gpu;
+        let read = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("stats read-back"),
+            size: 48,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(stats_buf, 0, &read, 0, 48);
+        let submission = gpu.queue.submit([enc.finish()]);
+        let s = gpu.read_back(&read, submission)?;
+        let sum = |k: usize| s[2 * k] as u64 | (s[2 * k + 1] as u64) << 32;
+        let r = &scene.render;
+        let primary = r.width as u64 * r.height as u64 * (r.aa * r.aa) as u64;
+        Ok(Stats {
+            primary_rays: primary,
+            evaluations: sum(0),
+            overshoots: sum(4),
+            overshoot_factor: f32::from_bits(s[10]),
+            rays: RayCounts {
+                primary,
+                reflected: sum(1),
+                refracted: sum(2),
+                shadow: sum(3),
+            },
+        })
+    }
+}
+
+/// Two timestamps around one pass, resolved into a buffer.
+struct Queries {
+    set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    read: wgpu::Buffer,
+}
+
+impl Queries {
+    fn new(device: &wgpu::Device) -> Queries {
+        Queries {
+            set: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass time"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            }),
+            resolve: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            read: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps read-back"),
+                size: 16,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            }),
+        }
+    }
+
+    fn resolve(&self, enc: &mut wgpu::CommandEncoder) {
+        enc.resolve_query_set(&self.set, 0..2, &self.resolve, 0);
+        enc.copy_buffer_to_buffer(&self.resolve, 0, &self.read, 0, 16);
+    }
+
+    /// The pass's duration (after its submission finished).
+    fn elapsed_ms(&self, gpu: &Gpu) -> Result<f64, GpuError> {
+        let slice = self.read.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        gpu.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Gpu(format!("reading timestamps: {e}")))?;
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Gpu(format!("reading timestamps: {e}")))?;
+        let t = |i: usize| u64::from_le_bytes(view[8 * i..8 * i + 8].try_into().expect("8 bytes"));
+        let ticks = t(1).saturating_sub(t(0));
+        Ok(ticks as f64 * gpu.queue.get_timestamp_period() as f64 / 1e6)
+    }
+}

@@ -1,0 +1,79 @@
+//! `isoray render --backend gpu`: the scene drawn by isoray-gpu.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use isoray_gpu::{GpuError, GpuRenderOptions, GpuRenderer};
+use isoray_job::Counter;
+use isoray_scene::Scene;
+
+use crate::{io_failure, jobs, Failure, Rendered};
+
+/// Renders on the GPU: the first Vulkan adapter (a real GPU before a
+/// software one), with a progress bar over the bands and, with `timing`,
+/// the pipeline build and each pass's GPU time on stderr.
+pub(crate) fn render_gpu(scene: &Scene, aovs: bool, timing: bool, quiet: bool) -> Result<Rendered, Failure> {
+    let start = Instant::now();
+    let mut renderer = GpuRenderer::new().map_err(gpu_failure)?;
+    let adapter = renderer.gpu().adapter_name();
+    let progress = Arc::new(Counter::default());
+    let opts = GpuRenderOptions {
+        aovs,
+        progress: Some(progress.clone()),
+        cancel: Some(jobs::cancel_token()),
+        timing,
+        kernel: None,
+    };
+    let result = std::thread::scope(|sc| {
+        let handle = sc.spawn(|| renderer.render(scene, &opts));
+        if !quiet {
+            let total = progress_total(scene);
+            crate::show_progress(&handle, &progress, total, start);
+        }
+        handle.join()
+    })
+    .map_err(|_| io_failure("the GPU renderer failed unexpectedly".into()))?;
+    let (image, stats, t) = result.map_err(gpu_failure)?;
+    if timing {
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        match t.pipeline_build {
+            Some(d) => eprintln!("timing: pipeline built in {:.1} ms", ms(d)),
+            None => eprintln!("timing: pipeline reused"),
+        }
+        if t.passes_ms.is_empty() {
+            eprintln!(
+                "timing: the adapter has no timestamp queries; frame wall time {:.1} ms",
+                ms(t.wall)
+            );
+        } else {
+            for (i, p) in t.passes_ms.iter().enumerate() {
+                eprintln!("timing: pass trace[{i}] {p:.3} ms (GPU)");
+            }
+            eprintln!(
+                "timing: GPU {:.3} ms in {} pass{}, frame wall time {:.1} ms",
+                t.gpu_ms().unwrap_or(0.0),
+                t.passes_ms.len(),
+                if t.passes_ms.len() == 1 { "" } else { "es" },
+                ms(t.wall)
+            );
+        }
+    }
+    Ok(Rendered {
+        image,
+        stats,
+        elapsed: start.elapsed().as_secs_f64(),
+        backend: format!("gpu {adapter}"),
+    })
+}
+
+/// The bands the renderer draws (what its progress counts).
+fn progress_total(scene: &Scene) -> usize {
+    isoray_gpu::band_count(scene.render.width, scene.render.height)
+}
+
+fn gpu_failure(e: GpuError) -> Failure {
+    match e {
+        GpuError::Cancelled => jobs::cancelled(),
+        other => io_failure(other.to_string()),
+    }
+}
