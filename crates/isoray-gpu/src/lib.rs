@@ -20,6 +20,6 @@ mod points;
 mod render;
 
 pub use device::{Gpu, GpuError};
-pub use pack::{interpretable, Kernel, SceneCode};
+pub use pack::{Kernel, SceneCode};
 pub use points::PointShader;
 pub use render::{band_count, GpuRenderOptions, GpuRenderer, GpuTiming};

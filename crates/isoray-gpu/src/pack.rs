@@ -57,14 +57,6 @@ impl Kernel {
     }
 }
 
-/// True when every object's tape fits the interpreter's registers.
-pub fn interpretable(scene: &Scene) -> bool {
-    scene
-        .objects
-        .iter()
-        .all(|o| o.shape.tape().slots() <= MAX_INTERPRETED_SLOTS)
-}
-
 /// Where one object's inputs and program live.
 #[derive(Debug, Clone)]
 struct ObjectCode {
@@ -219,7 +211,11 @@ impl Words {
         self.v3(v.map(|x| x as f32))
     }
     pub(crate) fn bytes(&self) -> Vec<u8> {
-        self.0.iter().flat_map(|w| w.to_le_bytes()).collect()
+        Words::bytes_of(&self.0)
+    }
+    /// Words as little-endian bytes.
+    pub(crate) fn bytes_of(words: &[u32]) -> Vec<u8> {
+        words.iter().flat_map(|w| w.to_le_bytes()).collect()
     }
 }
 
@@ -369,11 +365,11 @@ pub(crate) fn materials(scene: &Scene) -> Words {
 
 /// The environment buffer: for images, a header of (width, height,
 /// offset) per face (u32 bits) and the texels (RGB); for a gradient, its
-/// zenith, horizon and nadir colours.
+/// zenith, horizon and nadir colours; one word when there is none.
 pub(crate) fn environment(scene: &Scene) -> Words {
     let mut out = Words::default();
     let faces: Vec<&RgbImage> = match scene.environment.as_ref().map(|e| &e.map) {
-        None => Vec::new(),
+        None => return Words(vec![0]), // a storage buffer may not be empty
         Some(EnvMap::Equirect(img)) => vec![img.as_ref()],
         Some(EnvMap::Cube(faces)) => faces.iter().collect(),
         Some(EnvMap::Gradient { zenith, horizon, nadir }) => {

@@ -39,41 +39,12 @@ impl Gpu {
     /// it with `buffer = "iso_in"`, `base = 0`).
     pub fn point_shader(&self, function: &WgslFunction, name: &str) -> Result<PointShader, GpuError> {
         let source = point_module(function, name);
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(name),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let entry = |binding, read_only| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let layout = self.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("points"),
-            entries: &[entry(0, true), entry(1, true), entry(2, false)],
-        });
-        let pipeline_layout = self.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("points"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(name),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Gpu(format!("the shader of `{name}` did not compile: {e}")));
-        }
+        let storage = |read_only| wgpu::BufferBindingType::Storage { read_only };
+        let (pipeline, layout) = self.compute_pipeline(
+            &source,
+            &format!("`{name}`"),
+            &[storage(true), storage(true), storage(false)],
+        )?;
         Ok(PointShader { pipeline, layout })
     }
 

@@ -73,8 +73,15 @@ impl GpuTiming {
 
 struct Program {
     code: SceneCode,
+    /// The objects' tapes `code` was written from: a frame whose tapes are
+    /// the same reuses everything without writing the module again.
+    tapes: Vec<isoray_shape::Tape>,
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
+}
+
+fn tapes_of(scene: &Scene) -> Vec<isoray_shape::Tape> {
+    scene.objects.iter().map(|o| o.shape.tape().clone()).collect()
 }
 
 /// Renders scenes on a [`Gpu`], keeping the pipeline of the last scene
@@ -113,67 +120,43 @@ impl GpuRenderer {
     /// it took to build one, or None when the cached pipeline fits (the
     /// objects' shapes are the same; inputs and settings may differ).
     pub fn prepare(&mut self, scene: &Scene, kernel: Kernel) -> Result<Option<Duration>, GpuError> {
+        let same_tapes = |p: &Program| {
+            p.tapes.len() == scene.objects.len() && p.tapes.iter().zip(&scene.objects).all(|(t, o)| t == o.shape.tape())
+        };
+        if self
+            .program
+            .as_ref()
+            .is_some_and(|p| p.code.kernel == kernel && same_tapes(p))
+        {
+            return Ok(None);
+        }
         let code = SceneCode::new(scene, kernel).map_err(GpuError::Gpu)?;
         if let Some(p) = self.program.as_mut().filter(|p| p.code.source == code.source) {
+            // The interpreted kernel: the same module, new programs.
             p.code = code;
+            p.tapes = tapes_of(scene);
             return Ok(None);
         }
         let start = Instant::now();
-        let program = self.build(code)?;
+        let mut program = self.build(code)?;
+        program.tapes = tapes_of(scene);
         self.program = Some(program);
         Ok(Some(start.elapsed()))
     }
 
     fn build(&self, code: SceneCode) -> Result<Program, GpuError> {
-        let device = &self.gpu.device;
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("isoray tracer"),
-            source: wgpu::ShaderSource::Wgsl(code.source.as_str().into()),
-        });
-        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
         let read = wgpu::BufferBindingType::Storage { read_only: true };
         let write = wgpu::BufferBindingType::Storage { read_only: false };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("tracer"),
-            entries: &[
-                entry(0, read),
-                entry(1, wgpu::BufferBindingType::Uniform),
-                entry(2, read),
-                entry(3, read),
-                entry(4, read),
-                entry(5, read),
-                entry(6, write),
-                entry(7, write),
-                entry(8, read),
-            ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("tracer"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("tracer"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Gpu(format!("the scene's shader did not compile: {e}")));
-        }
-        Ok(Program { code, pipeline, layout })
+        let uniform = wgpu::BufferBindingType::Uniform;
+        // iso_in, settings, lights, materials, objects, environment, out, stats, programs.
+        let bindings = [read, uniform, read, read, read, read, write, write, read];
+        let (pipeline, layout) = self.gpu.compute_pipeline(&code.source, "the scene", &bindings)?;
+        Ok(Program {
+            code,
+            tapes: Vec::new(),
+            pipeline,
+            layout,
+        })
     }
 
     /// Renders the whole image of the scene (as [`isoray_render::render_with`]
@@ -203,14 +186,12 @@ impl GpuRenderer {
         let lights = storage("lights", &pack::lights(scene));
         let mats = storage("materials", &pack::materials(scene));
         let objs = storage("objects", &program.code.objects(scene));
-        let code_buf = storage("programs", &Words(program.code.code.clone()));
-        let env = storage("environment", &{
-            let mut e = pack::environment(scene);
-            if e.0.is_empty() {
-                e.0.push(0);
-            }
-            e
+        let code_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("programs"),
+            contents: &Words::bytes_of(&program.code.code),
+            usage: wgpu::BufferUsages::STORAGE,
         });
+        let env = storage("environment", &pack::environment(scene));
         let stats_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("stats"),
             contents: &[0u8; 48],

@@ -46,9 +46,16 @@ fn compare(g: &Gpu, shape: &Shape, vars: &[f64], pts: &[[f32; 3]], what: &str) -
     let gpu = g
         .eval_points(&shader, &f.fill(tape, vars), pts)
         .unwrap_or_else(|e| panic!("{what}: {e}"));
+    worst_difference(tape, vars, pts, &gpu, what)
+}
+
+/// The largest |gpu − cpu| / (1 + |cpu|) of the GPU's values `gpu` at the
+/// points against the CPU's f32 evaluator; a disagreement in kind (finite
+/// against not) fails.
+fn worst_difference(tape: &isoray_shape::Tape, vars: &[f64], pts: &[[f32; 3]], gpu: &[f32], what: &str) -> f64 {
     let mut cpu = PointEvaluator::<f32>::new(tape);
     let mut worst = 0.0f64;
-    for (p, &v) in pts.iter().zip(&gpu) {
+    for (p, &v) in pts.iter().zip(gpu) {
         let want = cpu.eval(vars, p[0], p[1], p[2]);
         assert_eq!(want.is_finite(), v.is_finite(), "{what} at {p:?}: gpu {v}, cpu {want}");
         if want.is_finite() {
@@ -58,17 +65,23 @@ fn compare(g: &Gpu, shape: &Shape, vars: &[f64], pts: &[[f32; 3]], what: &str) -
     worst
 }
 
-#[test]
-fn every_example_scene_agrees_with_the_cpu() {
-    let g = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
-    let pts = points();
-    let mut report = Vec::new();
+/// The example scene files, sorted.
+fn example_files() -> Vec<std::path::PathBuf> {
     let mut files: Vec<_> = std::fs::read_dir(examples())
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "toml"))
         .collect();
     files.sort();
+    files
+}
+
+#[test]
+fn every_example_scene_agrees_with_the_cpu() {
+    let g = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
+    let pts = points();
+    let mut report = Vec::new();
+    let files = example_files();
     assert!(files.len() >= 8);
     for path in files {
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
@@ -116,12 +129,7 @@ fn the_interpreter_agrees_with_the_cpu_on_every_example_object() {
     use isoray_shape::wgsl::{encode_tape, interpreter, WgslFunction};
     let g = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
     let pts = points();
-    let mut files: Vec<_> = std::fs::read_dir(examples())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-        .collect();
-    files.sort();
+    let files = example_files();
     for path in files {
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
         let scene = isoray_scene::load(&path, &[]).unwrap_or_else(|e| panic!("{}", e.rendered));
@@ -144,19 +152,7 @@ fn the_interpreter_agrees_with_the_cpu_on_every_example_object() {
             };
             let shader = g.point_shader(&f, "f").unwrap_or_else(|e| panic!("{name} {i}: {e}"));
             let gpu = g.eval_points(&shader, &prog.fill(tape, &scene.inputs), &pts).unwrap();
-            let mut cpu = PointEvaluator::<f32>::new(tape);
-            let mut worst = 0.0f64;
-            for (p, &v) in pts.iter().zip(&gpu) {
-                let want = cpu.eval(&scene.inputs, p[0], p[1], p[2]);
-                assert_eq!(
-                    want.is_finite(),
-                    v.is_finite(),
-                    "{name} {i} at {p:?}: gpu {v}, cpu {want}"
-                );
-                if want.is_finite() {
-                    worst = worst.max((v as f64 - want as f64).abs() / (1.0 + (want as f64).abs()));
-                }
-            }
+            let worst = worst_difference(tape, &scene.inputs, &pts, &gpu, &format!("{name} object {i}"));
             assert!(worst < 1e-5, "{name} object {i}: {worst:e}");
         }
     }

@@ -502,14 +502,9 @@ pub fn interpreter(code: &str, inputs: &str) -> String {
             binary_gradient(op, "x", "y", "v")
         ));
     }
-    format!(
-        r#"var<private> iso_regs: array<f32, {MAX_INTERPRETED_SLOTS}>;
-var<private> iso_dregs: array<vec4<f32>, {MAX_INTERPRETED_SLOTS}>;
-fn iso_run(start: u32, len: u32, out: u32, p: vec3<f32>) -> f32 {{
-    iso_regs[0] = p.x;
-    iso_regs[1] = p.y;
-    iso_regs[2] = p.z;
-    var pc = start;
+    // The loop head both interpreters share: fetch and decode one instruction.
+    let fetch = format!(
+        "    var pc = start;
     let end = start + 4u * len;
     while (pc < end) {{
         let w0 = {code}[pc];
@@ -519,7 +514,16 @@ fn iso_run(start: u32, len: u32, out: u32, p: vec3<f32>) -> f32 {{
         let b = {code}[pc + 2u];
         let c = {code}[pc + 3u];
         pc += 4u;
-        var v = 0.0;
+"
+    );
+    format!(
+        r#"var<private> iso_regs: array<f32, {MAX_INTERPRETED_SLOTS}>;
+var<private> iso_dregs: array<vec4<f32>, {MAX_INTERPRETED_SLOTS}>;
+fn iso_run(start: u32, len: u32, out: u32, p: vec3<f32>) -> f32 {{
+    iso_regs[0] = p.x;
+    iso_regs[1] = p.y;
+    iso_regs[2] = p.z;
+{fetch}        var v = 0.0;
         var write = true;
         switch op {{
 {value_cases}            case {OP_SELECT}u: {{ v = select(iso_regs[c], iso_regs[b], iso_regs[a] > 0.0); }}
@@ -539,17 +543,7 @@ fn iso_run_dual(start: u32, len: u32, out: u32, p: vec3<f32>) -> vec4<f32> {{
     iso_dregs[0] = vec4<f32>(p.x, 1.0, 0.0, 0.0);
     iso_dregs[1] = vec4<f32>(p.y, 0.0, 1.0, 0.0);
     iso_dregs[2] = vec4<f32>(p.z, 0.0, 0.0, 1.0);
-    var pc = start;
-    let end = start + 4u * len;
-    while (pc < end) {{
-        let w0 = {code}[pc];
-        let op = w0 & 0xffu;
-        let o = w0 >> 8u;
-        let a = {code}[pc + 1u];
-        let b = {code}[pc + 2u];
-        let c = {code}[pc + 3u];
-        pc += 4u;
-        var r = vec4<f32>(0.0);
+{fetch}        var r = vec4<f32>(0.0);
         var write = true;
         switch op {{
 {dual_cases}            case {OP_SELECT}u: {{ r = select(iso_dregs[c], iso_dregs[b], iso_dregs[a].x > 0.0); }}

@@ -27,7 +27,7 @@ pub(crate) fn render_gpu(scene: &Scene, aovs: bool, timing: bool, quiet: bool) -
     let result = std::thread::scope(|sc| {
         let handle = sc.spawn(|| renderer.render(scene, &opts));
         if !quiet {
-            let total = progress_total(scene);
+            let total = isoray_gpu::band_count(scene.render.width, scene.render.height);
             crate::show_progress(&handle, &progress, total, start);
         }
         handle.join()
@@ -64,11 +64,6 @@ pub(crate) fn render_gpu(scene: &Scene, aovs: bool, timing: bool, quiet: bool) -
         elapsed: start.elapsed().as_secs_f64(),
         backend: format!("gpu {adapter}"),
     })
-}
-
-/// The bands the renderer draws (what its progress counts).
-fn progress_total(scene: &Scene) -> usize {
-    isoray_gpu::band_count(scene.render.width, scene.render.height)
 }
 
 fn gpu_failure(e: GpuError) -> Failure {
