@@ -25,10 +25,15 @@ pub enum GpuError {
     Cancelled,
 }
 
+/// Storage buffers the tracer binds in one shader.
+const STORAGE_BUFFERS: u32 = 10;
+
 /// A GPU device and its queue, with the adapter's description.
 pub struct Gpu {
-    pub(crate) device: wgpu::Device,
-    pub(crate) queue: wgpu::Queue,
+    /// The wgpu device (for callers that draw with it, such as a preview).
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
     info: wgpu::AdapterInfo,
 }
 
@@ -57,9 +62,28 @@ impl Gpu {
         let info = adapter.get_info();
         // Timestamp queries time the passes where the adapter has them.
         let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+        // The tracer binds ten storage buffers (WebGPU's default allows 8;
+        // every Vulkan driver has more).
+        let have = adapter.limits();
+        if have.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS {
+            return Err(GpuError::Device {
+                adapter: info.name.clone(),
+                message: format!(
+                    "it binds {} storage buffers per shader, isoray's tracer needs {STORAGE_BUFFERS}",
+                    have.max_storage_buffers_per_shader_stage
+                ),
+            });
+        }
+        let limits = wgpu::Limits {
+            max_storage_buffers_per_shader_stage: STORAGE_BUFFERS,
+            max_storage_buffer_binding_size: have.max_storage_buffer_binding_size,
+            max_buffer_size: have.max_buffer_size,
+            ..Default::default()
+        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("isoray"),
             required_features: features,
+            required_limits: limits,
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device {

@@ -228,6 +228,25 @@ pub(crate) struct Band {
     pub(crate) height: u32,
 }
 
+/// The bytes of one entry of the tracer's ray stack (`PathRay`: four
+/// vec3s, the media and the depth).
+pub(crate) const PATH_RAY_BYTES: u64 = 96;
+
+/// The entries of the ray stack each pixel needs: at most one waiting ray
+/// per bounce plus one, when some material reflects or refracts; none when
+/// no ray ever bounces.
+pub(crate) fn stack_cap(scene: &Scene) -> u32 {
+    let optical = scene.materials.iter().any(|m| {
+        let s = MaterialSample::from(m);
+        s.transparency > 0.0 || s.reflectivity.max_element() > 0.0
+    });
+    if optical && scene.render.max_depth > 0 {
+        scene.render.max_depth + 1
+    } else {
+        0
+    }
+}
+
 /// The `Settings` buffer for one band of the image.
 pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool) -> Words {
     let record = if aovs { RECORD_AOVS } else { RECORD_COLOUR };
@@ -302,7 +321,7 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool) -> Words {
     out.d3(up).u(n_clear);
     out.u(env_kind).f(env_cos).f(env_sin).f(env_k);
     let any_analytic = scene.derived().analytic.iter().any(Option::is_some);
-    out.u(any_analytic as u32).u(record).u(0).u(0);
+    out.u(any_analytic as u32).u(record).u(stack_cap(scene)).u(0);
     debug_assert_eq!(out.0.len(), SETTINGS_WORDS);
     out
 }

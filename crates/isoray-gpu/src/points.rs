@@ -1,11 +1,14 @@
-//! Evaluating a shape tape at points in a compute pass.
+//! Evaluating a shape tape at points in a compute pass: a tape's compiled
+//! WGSL function, or its program run by the interpreter.
 
-use isoray_shape::wgsl::{WgslFunction, PRELUDE};
+use isoray_shape::wgsl::{interpreter, Program, WgslFunction, PRELUDE};
 use wgpu::util::DeviceExt;
 
 use crate::{Gpu, GpuError};
 
-/// A compute pipeline that evaluates one tape's WGSL function at points.
+/// A compute pipeline that evaluates a tape at points: one tape's WGSL
+/// function ([`Gpu::point_shader`]), or the interpreter, which runs any
+/// program given at evaluation ([`Gpu::program_shader`]).
 #[derive(Debug)]
 pub struct PointShader {
     pipeline: wgpu::ComputePipeline,
@@ -14,21 +17,40 @@ pub struct PointShader {
 
 const WORKGROUP: u32 = 64;
 
-/// The compute shader around `function` (named `name`, reading `iso_in`).
-pub fn point_module(function: &WgslFunction, name: &str) -> String {
+/// The compute shader whose lanes write `out[i] = {call}` at point `p`,
+/// after `code` (functions reading `iso_in` and, for the interpreter,
+/// `iso_code`).
+fn module(code: &str, call: &str) -> String {
     format!(
         "{PRELUDE}\n@group(0) @binding(0) var<storage, read> iso_in: array<f32>;\n\
          @group(0) @binding(1) var<storage, read> points: array<f32>;\n\
          @group(0) @binding(2) var<storage, read_write> out: array<f32>;\n\
-         {}\n\
+         @group(0) @binding(3) var<storage, read> iso_code: array<u32>;\n\
+         {code}\n\
          @compute @workgroup_size({WORKGROUP})\n\
          fn main(@builtin(global_invocation_id) id: vec3<u32>) {{\n\
          \x20   let i = id.x;\n\
          \x20   if (i >= arrayLength(&out)) {{ return; }}\n\
          \x20   let p = vec3<f32>(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]);\n\
-         \x20   out[i] = {name}(p);\n\
-         }}\n",
-        function.code
+         \x20   out[i] = {call};\n\
+         }}\n"
+    )
+}
+
+/// The compute shader around `function` (named `name`, reading `iso_in`).
+pub fn point_module(function: &WgslFunction, name: &str) -> String {
+    module(&function.code, &format!("{name}(p)"))
+}
+
+/// Words of the program buffer before the program: its length and result slot.
+const PROGRAM_HEADER: u32 = 4;
+
+/// The interpreter's compute shader: the program buffer holds the
+/// instruction count and the result slot, then the instructions.
+pub fn program_module() -> String {
+    module(
+        &interpreter("iso_code", "iso_in"),
+        &format!("iso_run({PROGRAM_HEADER}u, iso_code[0], iso_code[1], p)"),
     )
 }
 
@@ -38,12 +60,21 @@ impl Gpu {
     /// `iso_in` from index 0 (as [`isoray_shape::wgsl::emit_tape`] writes
     /// it with `buffer = "iso_in"`, `base = 0`).
     pub fn point_shader(&self, function: &WgslFunction, name: &str) -> Result<PointShader, GpuError> {
-        let source = point_module(function, name);
+        self.points_pipeline(&point_module(function, name), &format!("`{name}`"))
+    }
+
+    /// Compiles the interpreter's point pipeline, which evaluates any
+    /// program ([`Gpu::eval_program`]): one pipeline for every tape.
+    pub fn program_shader(&self) -> Result<PointShader, GpuError> {
+        self.points_pipeline(&program_module(), "the interpreter")
+    }
+
+    fn points_pipeline(&self, source: &str, what: &str) -> Result<PointShader, GpuError> {
         let storage = |read_only| wgpu::BufferBindingType::Storage { read_only };
         let (pipeline, layout) = self.compute_pipeline(
-            &source,
-            &format!("`{name}`"),
-            &[storage(true), storage(true), storage(false)],
+            source,
+            what,
+            &[storage(true), storage(true), storage(false), storage(true)],
         )?;
         Ok(PointShader { pipeline, layout })
     }
@@ -51,6 +82,31 @@ impl Gpu {
     /// The values of the shader's tape at `points`, with `inputs` in its
     /// input buffer (see [`WgslFunction::fill`]).
     pub fn eval_points(&self, shader: &PointShader, inputs: &[f32], points: &[[f32; 3]]) -> Result<Vec<f32>, GpuError> {
+        self.run_points(shader, inputs, &[0; PROGRAM_HEADER as usize], points)
+    }
+
+    /// The values of `program` at `points`, run by the interpreter's
+    /// pipeline ([`Gpu::program_shader`]), with `inputs` in its input
+    /// buffer (see [`Program::fill`]).
+    pub fn eval_program(
+        &self,
+        shader: &PointShader,
+        program: &Program,
+        inputs: &[f32],
+        points: &[[f32; 3]],
+    ) -> Result<Vec<f32>, GpuError> {
+        let mut code = vec![program.len() as u32, program.output, 0, 0];
+        code.extend(&program.code);
+        self.run_points(shader, inputs, &code, points)
+    }
+
+    fn run_points(
+        &self,
+        shader: &PointShader,
+        inputs: &[f32],
+        code: &[u32],
+        points: &[[f32; 3]],
+    ) -> Result<Vec<f32>, GpuError> {
         if points.is_empty() {
             return Ok(Vec::new());
         }
@@ -69,6 +125,11 @@ impl Gpu {
         let pt_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("points"),
             contents: &bytes(&flat),
+            usage: storage,
+        });
+        let code_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("iso_code"),
+            contents: &crate::pack::Words::bytes_of(code),
             usage: storage,
         });
         let size = (points.len() * 4) as u64;
@@ -99,6 +160,10 @@ impl Gpu {
                 wgpu::BindGroupEntry {
                     binding: 2,
                     resource: out_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: code_buf.as_entire_binding(),
                 },
             ],
         });

@@ -20,17 +20,28 @@ use wgpu::util::DeviceExt;
 use crate::pack::{self, Band, Kernel, SceneCode, Words};
 use crate::{Gpu, GpuError};
 
+/// The tracer's bindings.
+const BINDINGS: usize = 10;
+
 /// Pixels per dispatch at most (bands of whole rows).
 const BAND_PIXELS: u32 = 1 << 18;
 
-/// The rows of one band of a `width`-pixel-wide image.
-fn band_rows(width: u32, height: u32) -> u32 {
-    (BAND_PIXELS / width.max(1)).clamp(1, height.max(1))
+/// Bytes of ray stack per dispatch at most: a scene with deep reflections
+/// draws narrower bands.
+const STACK_BYTES: u64 = 64 << 20;
+
+/// The rows of one band of a `width`-pixel-wide image whose pixels each
+/// need `stack` entries of ray stack.
+fn band_rows(width: u32, height: u32, stack: u32) -> u32 {
+    let by_stack = STACK_BYTES / (stack.max(1) as u64 * pack::PATH_RAY_BYTES);
+    let pixels = (BAND_PIXELS as u64).min(by_stack) as u32;
+    (pixels / width.max(1)).clamp(1, height.max(1))
 }
 
-/// How many bands (dispatches, progress steps) a `width`×`height` image takes.
-pub fn band_count(width: u32, height: u32) -> usize {
-    height.div_ceil(band_rows(width, height)) as usize
+/// How many bands (dispatches, progress steps) the scene's image takes.
+pub fn band_count(scene: &Scene) -> usize {
+    let (w, h) = (scene.render.width, scene.render.height);
+    h.div_ceil(band_rows(w, h, pack::stack_cap(scene))) as usize
 }
 
 /// What to compute besides the colour, and the job's control.
@@ -139,6 +150,7 @@ impl GpuRenderer {
         }
         let start = Instant::now();
         let mut program = self.build(code)?;
+        self.warm_up(&program)?;
         program.tapes = tapes_of(scene);
         self.program = Some(program);
         Ok(Some(start.elapsed()))
@@ -148,14 +160,64 @@ impl GpuRenderer {
         let read = wgpu::BufferBindingType::Storage { read_only: true };
         let write = wgpu::BufferBindingType::Storage { read_only: false };
         let uniform = wgpu::BufferBindingType::Uniform;
-        // iso_in, settings, lights, materials, objects, environment, out, stats, programs.
-        let bindings = [read, uniform, read, read, read, read, write, write, read];
+        // iso_in, settings, lights, materials, objects, environment, out,
+        // stats, programs, ray stack.
+        let bindings = [read, uniform, read, read, read, read, write, write, read, write];
+        debug_assert_eq!(bindings.len(), BINDINGS);
         let (pipeline, layout) = self.gpu.compute_pipeline(&code.source, "the scene", &bindings)?;
         Ok(Program {
             code,
             tapes: Vec::new(),
             pipeline,
             layout,
+        })
+    }
+
+    /// Runs the new pipeline once on an empty region, so that a driver
+    /// that compiles at the first dispatch (lavapipe does) compiles now and
+    /// the build time reported is the whole cost of a structural edit.
+    fn warm_up(&self, program: &Program) -> Result<(), GpuError> {
+        let device = &self.gpu.device;
+        let buffers: Vec<wgpu::Buffer> = (0..BINDINGS)
+            .map(|i| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("warm-up"),
+                    // All zero: an empty region, so no lane does anything.
+                    size: 256.max(4 * pack::SETTINGS_WORDS as u64),
+                    usage: if i == 1 {
+                        wgpu::BufferUsages::UNIFORM
+                    } else {
+                        wgpu::BufferUsages::STORAGE
+                    },
+                    mapped_at_creation: false,
+                })
+            })
+            .collect();
+        let bind = self.bind_group(program, &buffers.iter().collect::<Vec<_>>());
+        let mut enc = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&program.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        let submission = self.gpu.queue.submit([enc.finish()]);
+        self.gpu.wait(submission)
+    }
+
+    fn bind_group(&self, program: &Program, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("tracer"),
+            layout: &program.layout,
+            entries: &entries,
         })
     }
 
@@ -198,7 +260,14 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         });
         let timestamps = opts.timing && device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
-        let rows = band_rows(w, h);
+        let stack_cap = pack::stack_cap(scene);
+        let rows = band_rows(w, h, stack_cap);
+        let stack_buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("ray stack"),
+            size: (rows as u64 * w as u64 * stack_cap as u64).max(1) * pack::PATH_RAY_BYTES,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
         let bands: Vec<Band> = (0..h.div_ceil(rows))
             .map(|b| Band {
                 x0: 0,
@@ -245,21 +314,9 @@ impl GpuRenderer {
                 mapped_at_creation: false,
             });
             let buffers = [
-                &in_buf, &cfg, &lights, &mats, &objs, &env, &out_buf, &stats_buf, &code_buf,
+                &in_buf, &cfg, &lights, &mats, &objs, &env, &out_buf, &stats_buf, &code_buf, &stack_buf,
             ];
-            let entries: Vec<wgpu::BindGroupEntry> = buffers
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
-            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("tracer"),
-                layout: &program.layout,
-                entries: &entries,
-            });
+            let bind = self.bind_group(program, &buffers);
             let query = timestamps.then(|| Queries::new(device));
             let mut enc = device.create_command_encoder(&Default::default());
             {

@@ -21,7 +21,7 @@ struct Settings {
     right_x: f32, right_y: f32, right_z: f32, aspect: f32,
     up_x: f32, up_y: f32, up_z: f32, n_clear: u32,
     env_kind: u32, env_cos: f32, env_sin: f32, env_k: f32,
-    any_analytic: u32, record: u32, pad1: u32, pad2: u32,
+    any_analytic: u32, record: u32, stack_cap: u32, pad2: u32,
 }
 
 struct Light {
@@ -65,7 +65,6 @@ var<workgroup> wg_stats: array<atomic<u32>, 6>;
 const EMPTY: f32 = 1e9;
 const OFFSET: f32 = 10.0;
 const MAX_SHADOW_SEGMENTS: u32 = 8u;
-const STACK: u32 = 66u;
 const MEDIA: u32 = 6u;
 const NO_CHECKER: u32 = 0xffffffffu;
 
@@ -805,7 +804,13 @@ fn shade(p: vec3<f32>, n: vec3<f32>, dir: vec3<f32>, s: Mat, local: vec3<f32>, m
 // ---- paths (isoray-render's whitted module), depth first ----
 struct PathRay { o: vec3<f32>, d: vec3<f32>, w: vec3<f32>, src: vec3<f32>, media: Media, depth: u32 }
 
-var<private> stack: array<PathRay, STACK>;
+// The rays waiting to be traced, `cfg.stack_cap` per pixel of the band
+// (max_depth + 1 when some material reflects or refracts, else none). In a
+// storage buffer, not a private array: a private array of structures
+// indexed at run time costs the driver's compiler minutes (lavapipe: 72 s
+// for a stack of 66, 3 s for 4) and every lane its size in registers.
+@group(0) @binding(9) var<storage, read_write> paths: array<PathRay>;
+var<private> stack_base: u32;
 
 // The objects whose surfaces pass within a few hit epsilons of p (the
 // nearest first): touching transparent objects share an interface.
@@ -836,14 +841,12 @@ struct PathResult { color: vec3<f32>, t: f32, steps: u32, n: vec3<f32>, albedo: 
 fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult {
     var res = PathResult(vec3<f32>(0.0), iso_inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
     var sum = vec3<f32>(0.0);
-    var top = 1u;
+    var top = 0u;
     var m0: Media;
     m0.len = 0u;
-    stack[0] = PathRay(o, d, vec3<f32>(1.0), o, m0, 0u);
+    var ray = PathRay(o, d, vec3<f32>(1.0), o, m0, 0u);
     let eps = cfg.hit_eps;
-    while (top > 0u) {
-        top -= 1u;
-        var ray = stack[top];
+    loop {
         let inside = ray.media.len > 0u;
         let h = trace(ray.o, ray.d, inside);
         if (first) {
@@ -882,15 +885,15 @@ fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult
             if (ray.depth < cfg.max_depth) {
                 let off = OFFSET * eps;
                 let wr = ray.w * at.reflect;
-                if (max3(wr) >= cfg.min_weight && top < STACK) {
-                    stack[top] = PathRay(h.p + h.n * off, reflect_dir(ray.d, h.n), wr, h.p, media, ray.depth + 1u);
+                if (max3(wr) >= cfg.min_weight && top < cfg.stack_cap) {
+                    paths[stack_base + top] = PathRay(h.p + h.n * off, reflect_dir(ray.d, h.n), wr, h.p, media, ray.depth + 1u);
                     top += 1u;
                     n_reflected += 1u;
                 }
                 if (at.can_refract) {
                     let wt = ray.w * at.transmit;
-                    if (max3(wt) >= cfg.min_weight && top < STACK) {
-                        stack[top] = PathRay(h.p - h.n * off, at.refracted, wt, h.p, after, ray.depth + 1u);
+                    if (max3(wt) >= cfg.min_weight && top < cfg.stack_cap) {
+                        paths[stack_base + top] = PathRay(h.p - h.n * off, at.refracted, wt, h.p, after, ray.depth + 1u);
                         top += 1u;
                         n_refracted += 1u;
                     }
@@ -899,6 +902,15 @@ fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult
         }
         let seed = seed0 + ray.depth;
         sum += ray.w * shade(h.p, h.n, ray.d, surf.m, local, ray.media, seed);
+        continuing {
+            // Depth first, as the CPU recurses: the last ray pushed next.
+            let done = top == 0u;
+            if (!done) {
+                top -= 1u;
+                ray = paths[stack_base + top];
+            }
+            break if done;
+        }
     }
     res.color = sum;
     return res;
@@ -1015,7 +1027,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_
         n_shadow = 0u;
         n_overshoots = 0u;
         worst_overshoot = 0.0;
-        render_pixel(cfg.x0 + id.x, cfg.y0 + id.y, cfg.record * (id.y * cfg.region_w + id.x));
+        let lane_index = id.y * cfg.region_w + id.x;
+        stack_base = lane_index * cfg.stack_cap;
+        render_pixel(cfg.x0 + id.x, cfg.y0 + id.y, cfg.record * lane_index);
         atomicAdd(&wg_stats[0], n_evals);
         atomicAdd(&wg_stats[1], n_reflected);
         atomicAdd(&wg_stats[2], n_refracted);

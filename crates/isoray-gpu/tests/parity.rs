@@ -114,13 +114,6 @@ fn parity(path: &std::path::Path, gpu: &mut GpuRenderer, width: u32, height: u32
     }
 }
 
-/// Scenes the GPU renderer cannot draw in a test's time yet (see the note
-/// on issue 14): on lavapipe the dispatch of placement and reflections runs
-/// for minutes (a bug of isoray-gpu not yet found), and the compiled
-/// kernel of surfaces (2328 instructions) takes lavapipe's compiler more
-/// than ten minutes. Every other scene is held to the parity bounds.
-const KNOWN_SLOW: &[&str] = &["placement.toml", "reflections.toml", "surfaces.toml"];
-
 #[test]
 fn every_example_scene_renders_as_on_the_cpu() {
     let mut gpu = GpuRenderer::new().unwrap_or_else(|e| panic!("{e}"));
@@ -133,7 +126,7 @@ fn every_example_scene_renders_as_on_the_cpu() {
             .unwrap()
             .display()
             .to_string();
-        if only.as_ref().is_some_and(|o| !name.contains(o.as_str())) || KNOWN_SLOW.contains(&name.as_str()) {
+        if only.as_ref().is_some_and(|o| !name.contains(o.as_str())) {
             continue;
         }
         let p = parity(&path, &mut gpu, 160, 90);

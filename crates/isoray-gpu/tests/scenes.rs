@@ -123,35 +123,23 @@ fn a_new_parameter_value_is_a_new_buffer_not_a_new_shader() {
     assert!((v[0] - 0.5).abs() < 1e-6, "{v:?}");
 }
 
-/// The interpreting kernel's programs give what the compiled functions give.
+/// The interpreting kernel's programs give what the CPU gives, every
+/// example object run by one interpreter pipeline.
 #[test]
 fn the_interpreter_agrees_with_the_cpu_on_every_example_object() {
-    use isoray_shape::wgsl::{encode_tape, interpreter, WgslFunction};
+    use isoray_shape::wgsl::encode_tape;
     let g = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
+    let shader = g.program_shader().unwrap_or_else(|e| panic!("{e}"));
     let pts = points();
-    let files = example_files();
-    for path in files {
+    for path in example_files() {
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
         let scene = isoray_scene::load(&path, &[]).unwrap_or_else(|e| panic!("{}", e.rendered));
         for (i, o) in scene.objects.iter().enumerate() {
             let tape = o.shape.tape();
             let prog = encode_tape(tape, 0).unwrap();
-            let words: Vec<String> = prog.code.iter().map(|w| format!("{w}u")).collect();
-            let code = format!(
-                "var<private> iso_code: array<u32, {}> = array<u32, {}>({});\n{}\nfn f(p: vec3<f32>) -> f32 {{ return iso_run(0u, {}u, {}u, p); }}\n",
-                words.len(),
-                words.len(),
-                words.join(", "),
-                interpreter("iso_code", "iso_in"),
-                prog.len(),
-                prog.output
-            );
-            let f = WgslFunction {
-                code,
-                uniform_slots: prog.uniform_slots.clone(),
-            };
-            let shader = g.point_shader(&f, "f").unwrap_or_else(|e| panic!("{name} {i}: {e}"));
-            let gpu = g.eval_points(&shader, &prog.fill(tape, &scene.inputs), &pts).unwrap();
+            let gpu = g
+                .eval_program(&shader, &prog, &prog.fill(tape, &scene.inputs), &pts)
+                .unwrap();
             let worst = worst_difference(tape, &scene.inputs, &pts, &gpu, &format!("{name} object {i}"));
             assert!(worst < 1e-5, "{name} object {i}: {worst:e}");
         }

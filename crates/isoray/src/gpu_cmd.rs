@@ -27,7 +27,7 @@ pub(crate) fn render_gpu(scene: &Scene, aovs: bool, timing: bool, quiet: bool) -
     let result = std::thread::scope(|sc| {
         let handle = sc.spawn(|| renderer.render(scene, &opts));
         if !quiet {
-            let total = isoray_gpu::band_count(scene.render.width, scene.render.height);
+            let total = isoray_gpu::band_count(scene);
             crate::show_progress(&handle, &progress, total, start);
         }
         handle.join()
