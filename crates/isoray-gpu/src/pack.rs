@@ -228,27 +228,46 @@ pub(crate) struct Band {
     pub(crate) height: u32,
 }
 
-/// The bytes of one entry of the tracer's ray stack (`PathRay`: four
-/// vec3s, the media and the depth).
-pub(crate) const PATH_RAY_BYTES: u64 = 96;
+/// The scratch each pixel's lane needs (binding 9, in vec4s of 16 bytes):
+/// its ray stack and its interpreter registers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Scratch {
+    /// Ray-stack entries (6 vec4s each): at most one waiting ray per
+    /// bounce plus one when some material reflects or refracts; none when
+    /// no ray ever bounces.
+    pub(crate) stack_cap: u32,
+    /// Registers of the interpreting kernel (the most slots of any
+    /// object's tape); none for the compiled kernel.
+    pub(crate) reg_slots: u32,
+}
 
-/// The entries of the ray stack each pixel needs: at most one waiting ray
-/// per bounce plus one, when some material reflects or refracts; none when
-/// no ray ever bounces.
-pub(crate) fn stack_cap(scene: &Scene) -> u32 {
-    let optical = scene.materials.iter().any(|m| {
-        let s = MaterialSample::from(m);
-        s.transparency > 0.0 || s.reflectivity.max_element() > 0.0
-    });
-    if optical && scene.render.max_depth > 0 {
-        scene.render.max_depth + 1
-    } else {
-        0
+impl Scratch {
+    /// What the scene needs with `kernel`.
+    pub(crate) fn of(scene: &Scene, kernel: Kernel) -> Scratch {
+        let optical = scene.materials.iter().any(|m| {
+            let s = MaterialSample::from(m);
+            s.transparency > 0.0 || s.reflectivity.max_element() > 0.0
+        });
+        let stack_cap = if optical && scene.render.max_depth > 0 {
+            scene.render.max_depth + 1
+        } else {
+            0
+        };
+        let reg_slots = match kernel {
+            Kernel::Compiled => 0,
+            Kernel::Interpreted => scene.objects.iter().map(|o| o.shape.tape().slots()).max().unwrap_or(0) as u32,
+        };
+        Scratch { stack_cap, reg_slots }
+    }
+
+    /// Bytes per pixel.
+    pub(crate) fn bytes_per_pixel(self) -> u64 {
+        16 * (6 * self.stack_cap as u64 + self.reg_slots as u64)
     }
 }
 
 /// The `Settings` buffer for one band of the image.
-pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool) -> Words {
+pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch) -> Words {
     let record = if aovs { RECORD_AOVS } else { RECORD_COLOUR };
     let r = &scene.render;
     let c = &scene.camera;
@@ -321,7 +340,10 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool) -> Words {
     out.d3(up).u(n_clear);
     out.u(env_kind).f(env_cos).f(env_sin).f(env_k);
     let any_analytic = scene.derived().analytic.iter().any(Option::is_some);
-    out.u(any_analytic as u32).u(record).u(stack_cap(scene)).u(0);
+    out.u(any_analytic as u32)
+        .u(record)
+        .u(scratch.stack_cap)
+        .u(scratch.reg_slots);
     debug_assert_eq!(out.0.len(), SETTINGS_WORDS);
     out
 }

@@ -26,12 +26,15 @@ fn module(code: &str, call: &str) -> String {
          @group(0) @binding(1) var<storage, read> points: array<f32>;\n\
          @group(0) @binding(2) var<storage, read_write> out: array<f32>;\n\
          @group(0) @binding(3) var<storage, read> iso_code: array<u32>;\n\
+         @group(0) @binding(4) var<storage, read_write> iso_regs: array<vec4<f32>>;\n\
+         var<private> iso_reg_base: u32;\n\
          {code}\n\
          @compute @workgroup_size({WORKGROUP})\n\
          fn main(@builtin(global_invocation_id) id: vec3<u32>) {{\n\
          \x20   let i = id.x;\n\
          \x20   if (i >= arrayLength(&out)) {{ return; }}\n\
          \x20   let p = vec3<f32>(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]);\n\
+         \x20   iso_reg_base = i * iso_code[2];\n\
          \x20   out[i] = {call};\n\
          }}\n"
     )
@@ -42,11 +45,13 @@ pub fn point_module(function: &WgslFunction, name: &str) -> String {
     module(&function.code, &format!("{name}(p)"))
 }
 
-/// Words of the program buffer before the program: its length and result slot.
+/// Words of the program buffer before the program: its length, result
+/// slot and register count.
 const PROGRAM_HEADER: u32 = 4;
 
 /// The interpreter's compute shader: the program buffer holds the
-/// instruction count and the result slot, then the instructions.
+/// instruction count, the result slot and the register count, then the
+/// instructions; each point's registers are its part of binding 4.
 pub fn program_module() -> String {
     module(
         &interpreter("iso_code", "iso_in"),
@@ -74,7 +79,13 @@ impl Gpu {
         let (pipeline, layout) = self.compute_pipeline(
             source,
             what,
-            &[storage(true), storage(true), storage(false), storage(true)],
+            &[
+                storage(true),
+                storage(true),
+                storage(false),
+                storage(true),
+                storage(false),
+            ],
         )?;
         Ok(PointShader { pipeline, layout })
     }
@@ -82,7 +93,7 @@ impl Gpu {
     /// The values of the shader's tape at `points`, with `inputs` in its
     /// input buffer (see [`WgslFunction::fill`]).
     pub fn eval_points(&self, shader: &PointShader, inputs: &[f32], points: &[[f32; 3]]) -> Result<Vec<f32>, GpuError> {
-        self.run_points(shader, inputs, &[0; PROGRAM_HEADER as usize], points)
+        self.run_points(shader, inputs, &[0; PROGRAM_HEADER as usize], 0, points)
     }
 
     /// The values of `program` at `points`, run by the interpreter's
@@ -95,9 +106,9 @@ impl Gpu {
         inputs: &[f32],
         points: &[[f32; 3]],
     ) -> Result<Vec<f32>, GpuError> {
-        let mut code = vec![program.len() as u32, program.output, 0, 0];
+        let mut code = vec![program.len() as u32, program.output, program.slots as u32, 0];
         code.extend(&program.code);
-        self.run_points(shader, inputs, &code, points)
+        self.run_points(shader, inputs, &code, program.slots, points)
     }
 
     fn run_points(
@@ -105,6 +116,7 @@ impl Gpu {
         shader: &PointShader,
         inputs: &[f32],
         code: &[u32],
+        registers: usize,
         points: &[[f32; 3]],
     ) -> Result<Vec<f32>, GpuError> {
         if points.is_empty() {
@@ -131,6 +143,12 @@ impl Gpu {
             label: Some("iso_code"),
             contents: &crate::pack::Words::bytes_of(code),
             usage: storage,
+        });
+        let regs_buf = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("iso_regs"),
+            size: (points.len() * registers).max(1) as u64 * 16,
+            usage: storage,
+            mapped_at_creation: false,
         });
         let size = (points.len() * 4) as u64;
         let out_buf = self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -164,6 +182,10 @@ impl Gpu {
                 wgpu::BindGroupEntry {
                     binding: 3,
                     resource: code_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: regs_buf.as_entire_binding(),
                 },
             ],
         });

@@ -17,7 +17,7 @@ use isoray_render::{RayCounts, RenderedImage, Stats};
 use isoray_scene::Scene;
 use wgpu::util::DeviceExt;
 
-use crate::pack::{self, Band, Kernel, SceneCode, Words};
+use crate::pack::{self, Band, Kernel, SceneCode, Scratch, Words};
 use crate::{Gpu, GpuError};
 
 /// The tracer's bindings.
@@ -26,22 +26,25 @@ const BINDINGS: usize = 10;
 /// Pixels per dispatch at most (bands of whole rows).
 const BAND_PIXELS: u32 = 1 << 18;
 
-/// Bytes of ray stack per dispatch at most: a scene with deep reflections
-/// draws narrower bands.
-const STACK_BYTES: u64 = 64 << 20;
+/// Bytes of lane scratch (ray stacks, interpreter registers) per dispatch
+/// at most: a scene with deep reflections or large interpreted tapes draws
+/// narrower bands.
+const SCRATCH_BYTES: u64 = 64 << 20;
 
 /// The rows of one band of a `width`-pixel-wide image whose pixels each
-/// need `stack` entries of ray stack.
-fn band_rows(width: u32, height: u32, stack: u32) -> u32 {
-    let by_stack = STACK_BYTES / (stack.max(1) as u64 * pack::PATH_RAY_BYTES);
-    let pixels = (BAND_PIXELS as u64).min(by_stack) as u32;
+/// need `scratch`.
+fn band_rows(width: u32, height: u32, scratch: Scratch) -> u32 {
+    let by_scratch = SCRATCH_BYTES / scratch.bytes_per_pixel().max(1);
+    let pixels = (BAND_PIXELS as u64).min(by_scratch) as u32;
     (pixels / width.max(1)).clamp(1, height.max(1))
 }
 
-/// How many bands (dispatches, progress steps) the scene's image takes.
-pub fn band_count(scene: &Scene) -> usize {
+/// How many bands (dispatches, progress steps) the scene's image takes
+/// with `kernel` (None: the renderer's choice).
+pub fn band_count(scene: &Scene, kernel: Option<Kernel>) -> usize {
     let (w, h) = (scene.render.width, scene.render.height);
-    h.div_ceil(band_rows(w, h, pack::stack_cap(scene))) as usize
+    let kernel = kernel.unwrap_or_else(|| Kernel::choose(scene));
+    h.div_ceil(band_rows(w, h, Scratch::of(scene, kernel))) as usize
 }
 
 /// What to compute besides the colour, and the job's control.
@@ -161,7 +164,7 @@ impl GpuRenderer {
         let write = wgpu::BufferBindingType::Storage { read_only: false };
         let uniform = wgpu::BufferBindingType::Uniform;
         // iso_in, settings, lights, materials, objects, environment, out,
-        // stats, programs, ray stack.
+        // stats, programs, scratch.
         let bindings = [read, uniform, read, read, read, read, write, write, read, write];
         debug_assert_eq!(bindings.len(), BINDINGS);
         let (pipeline, layout) = self.gpu.compute_pipeline(&code.source, "the scene", &bindings)?;
@@ -260,11 +263,11 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         });
         let timestamps = opts.timing && device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
-        let stack_cap = pack::stack_cap(scene);
-        let rows = band_rows(w, h, stack_cap);
-        let stack_buf = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("ray stack"),
-            size: (rows as u64 * w as u64 * stack_cap as u64).max(1) * pack::PATH_RAY_BYTES,
+        let scratch = Scratch::of(scene, kernel);
+        let rows = band_rows(w, h, scratch);
+        let scratch_buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scratch"),
+            size: (rows as u64 * w as u64 * scratch.bytes_per_pixel()).max(16),
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
@@ -297,7 +300,7 @@ impl GpuRenderer {
             }
             let cfg = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("settings"),
-                contents: &pack::settings(scene, *band, opts.aovs).bytes(),
+                contents: &pack::settings(scene, *band, opts.aovs, scratch).bytes(),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
             let size = (band.width as usize * band.height as usize * record * 4) as u64;
@@ -314,7 +317,16 @@ impl GpuRenderer {
                 mapped_at_creation: false,
             });
             let buffers = [
-                &in_buf, &cfg, &lights, &mats, &objs, &env, &out_buf, &stats_buf, &code_buf, &stack_buf,
+                &in_buf,
+                &cfg,
+                &lights,
+                &mats,
+                &objs,
+                &env,
+                &out_buf,
+                &stats_buf,
+                &code_buf,
+                &scratch_buf,
             ];
             let bind = self.bind_group(program, &buffers);
             let query = timestamps.then(|| Queries::new(device));

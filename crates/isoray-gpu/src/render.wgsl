@@ -21,7 +21,7 @@ struct Settings {
     right_x: f32, right_y: f32, right_z: f32, aspect: f32,
     up_x: f32, up_y: f32, up_z: f32, n_clear: u32,
     env_kind: u32, env_cos: f32, env_sin: f32, env_k: f32,
-    any_analytic: u32, record: u32, stack_cap: u32, pad2: u32,
+    any_analytic: u32, record: u32, stack_cap: u32, reg_slots: u32,
 }
 
 struct Light {
@@ -61,6 +61,9 @@ struct Obj {
 var<workgroup> wg_stats: array<atomic<u32>, 6>;
 // The objects' programs, for the interpreting kernel (unused by the compiled one).
 @group(0) @binding(8) var<storage, read> iso_code: array<u32>;
+// The lanes' scratch: ray stacks and interpreter registers (see ray_push).
+@group(0) @binding(9) var<storage, read_write> iso_regs: array<vec4<f32>>;
+var<private> iso_reg_base: u32;
 
 const EMPTY: f32 = 1e9;
 const OFFSET: f32 = 10.0;
@@ -804,13 +807,36 @@ fn shade(p: vec3<f32>, n: vec3<f32>, dir: vec3<f32>, s: Mat, local: vec3<f32>, m
 // ---- paths (isoray-render's whitted module), depth first ----
 struct PathRay { o: vec3<f32>, d: vec3<f32>, w: vec3<f32>, src: vec3<f32>, media: Media, depth: u32 }
 
-// The rays waiting to be traced, `cfg.stack_cap` per pixel of the band
-// (max_depth + 1 when some material reflects or refracts, else none). In a
-// storage buffer, not a private array: a private array of structures
-// indexed at run time costs the driver's compiler minutes (lavapipe: 72 s
-// for a stack of 66, 3 s for 4) and every lane its size in registers.
-@group(0) @binding(9) var<storage, read_write> paths: array<PathRay>;
+// Each lane's scratch, in a storage buffer: first its stack of rays
+// waiting to be traced, `cfg.stack_cap` entries of 6 vec4s (max_depth + 1
+// when some material reflects or refracts, else none), then the
+// interpreting kernel's `cfg.reg_slots` registers (`iso_regs`,
+// `iso_reg_base`: see isoray_shape::wgsl::interpreter). Not private
+// arrays: lavapipe compiles a private array of structures indexed at run
+// time for minutes (72 s for a stack of 66, 3 s for 4), and every lane
+// would hold its whole size in registers.
 var<private> stack_base: u32;
+
+fn ray_push(k: u32, r: PathRay) {
+    let b = stack_base + 6u * k;
+    let m = r.media.objs;
+    iso_regs[b] = vec4<f32>(r.o, 0.0);
+    iso_regs[b + 1u] = vec4<f32>(r.d, 0.0);
+    iso_regs[b + 2u] = vec4<f32>(r.w, 0.0);
+    iso_regs[b + 3u] = vec4<f32>(r.src, 0.0);
+    iso_regs[b + 4u] = bitcast<vec4<f32>>(vec4<u32>(m[0], m[1], m[2], m[3]));
+    iso_regs[b + 5u] = bitcast<vec4<f32>>(vec4<u32>(m[4], m[5], r.media.len, r.depth));
+}
+
+fn ray_pop(k: u32) -> PathRay {
+    let b = stack_base + 6u * k;
+    let m0 = bitcast<vec4<u32>>(iso_regs[b + 4u]);
+    let m1 = bitcast<vec4<u32>>(iso_regs[b + 5u]);
+    var media: Media;
+    media.objs = array<u32, 6>(m0.x, m0.y, m0.z, m0.w, m1.x, m1.y);
+    media.len = m1.z;
+    return PathRay(iso_regs[b].xyz, iso_regs[b + 1u].xyz, iso_regs[b + 2u].xyz, iso_regs[b + 3u].xyz, media, m1.w);
+}
 
 // The objects whose surfaces pass within a few hit epsilons of p (the
 // nearest first): touching transparent objects share an interface.
@@ -886,14 +912,14 @@ fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult
                 let off = OFFSET * eps;
                 let wr = ray.w * at.reflect;
                 if (max3(wr) >= cfg.min_weight && top < cfg.stack_cap) {
-                    paths[stack_base + top] = PathRay(h.p + h.n * off, reflect_dir(ray.d, h.n), wr, h.p, media, ray.depth + 1u);
+                    ray_push(top, PathRay(h.p + h.n * off, reflect_dir(ray.d, h.n), wr, h.p, media, ray.depth + 1u));
                     top += 1u;
                     n_reflected += 1u;
                 }
                 if (at.can_refract) {
                     let wt = ray.w * at.transmit;
                     if (max3(wt) >= cfg.min_weight && top < cfg.stack_cap) {
-                        paths[stack_base + top] = PathRay(h.p - h.n * off, at.refracted, wt, h.p, after, ray.depth + 1u);
+                        ray_push(top, PathRay(h.p - h.n * off, at.refracted, wt, h.p, after, ray.depth + 1u));
                         top += 1u;
                         n_refracted += 1u;
                     }
@@ -907,7 +933,7 @@ fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult
             let done = top == 0u;
             if (!done) {
                 top -= 1u;
-                ray = paths[stack_base + top];
+                ray = ray_pop(top);
             }
             break if done;
         }
@@ -1028,7 +1054,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_
         n_overshoots = 0u;
         worst_overshoot = 0.0;
         let lane_index = id.y * cfg.region_w + id.x;
-        stack_base = lane_index * cfg.stack_cap;
+        stack_base = lane_index * (6u * cfg.stack_cap + cfg.reg_slots);
+        iso_reg_base = stack_base + 6u * cfg.stack_cap;
         render_pixel(cfg.x0 + id.x, cfg.y0 + id.y, cfg.record * lane_index);
         atomicAdd(&wg_stats[0], n_evals);
         atomicAdd(&wg_stats[1], n_reflected);

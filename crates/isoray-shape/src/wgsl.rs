@@ -365,8 +365,9 @@ fn emit(tape: &Tape, name: &str, buffer: &str, base: u32, dual: bool) -> WgslFun
 }
 
 /// The largest slot count a tape may have to run on [`interpreter`]
-/// (its registers are a private array of this size).
-pub const MAX_INTERPRETED_SLOTS: usize = 256;
+/// (each slot is a register of 16 bytes per lane in the caller's
+/// register buffer).
+pub const MAX_INTERPRETED_SLOTS: usize = 4096;
 
 /// Opcode of the first binary operation (`32 + position in BINARY`);
 /// unary operations are their position in [`UNARY`](crate::conformance::UNARY).
@@ -475,33 +476,71 @@ pub fn encode_tape(tape: &Tape, base: u32) -> Option<Program> {
 /// `out`; `iso_run_dual` does the same with dual numbers (value and
 /// gradient, as [`emit_tape_dual`]). Every operation's case is written
 /// from [`unary`] and [`binary`], the same code the compiled functions use.
+///
+/// The registers are the lane's slots of a read-write storage buffer the
+/// caller declares, `iso_regs: array<vec4<f32>>`, from the private
+/// `iso_reg_base: u32` the caller sets per lane (a program with `slots`
+/// slots uses `iso_reg_base .. iso_reg_base + slots`; values use `.x`).
+/// Not a private array: lavapipe compiles a private register file indexed
+/// at run time slowly, and inside the tracer it gave wrong values.
 pub fn interpreter(code: &str, inputs: &str) -> String {
-    let mut value_cases = String::new();
-    let mut dual_cases = String::new();
+    let r = |s: &str| format!("iso_regs[iso_reg_base + {s}]");
+    let mut value_cases = Vec::new();
+    let mut dual_cases = Vec::new();
     for &op in crate::conformance::UNARY {
         let k = unary_code(op);
-        value_cases.push_str(&format!(
-            "            case {k}u: {{ v = {}; }}\n",
-            unary(op, "iso_regs[a]")
-        ));
-        dual_cases.push_str(&format!(
-            "            case {k}u: {{ let x = iso_dregs[a]; let v = {}; r = vec4<f32>(v, x.yzw * ({})); }}\n",
-            unary(op, "x.x"),
-            unary_slope(op, "x.x", "v")
+        value_cases.push((k, format!("v = {};", unary(op, &format!("{}.x", r("a"))))));
+        dual_cases.push((
+            k,
+            format!(
+                "let x = {}; let v = {}; d = vec4<f32>(v, x.yzw * ({}));",
+                r("a"),
+                unary(op, "x.x"),
+                unary_slope(op, "x.x", "v")
+            ),
         ));
     }
     for &op in crate::conformance::BINARY {
         let k = binary_code(op);
-        value_cases.push_str(&format!(
-            "            case {k}u: {{ v = {}; }}\n",
-            binary(op, "iso_regs[a]", "iso_regs[b]")
+        value_cases.push((
+            k,
+            format!(
+                "v = {};",
+                binary(op, &format!("{}.x", r("a")), &format!("{}.x", r("b")))
+            ),
         ));
-        dual_cases.push_str(&format!(
-            "            case {k}u: {{ let x = iso_dregs[a]; let y = iso_dregs[b]; let v = {}; r = vec4<f32>(v, {}); }}\n",
-            binary(op, "x.x", "y.x"),
-            binary_gradient(op, "x", "y", "v")
+        dual_cases.push((
+            k,
+            format!(
+                "let x = {}; let y = {}; let v = {}; d = vec4<f32>(v, {});",
+                r("a"),
+                r("b"),
+                binary(op, "x.x", "y.x"),
+                binary_gradient(op, "x", "y", "v")
+            ),
         ));
     }
+    let skip = format!("write = false; if ({}.x > 0.0) {{ pc += 4u * b; }}", r("a"));
+    value_cases.extend([
+        (
+            OP_SELECT,
+            format!("v = select({}.x, {}.x, {}.x > 0.0);", r("c"), r("b"), r("a")),
+        ),
+        (OP_SKIP, skip.clone()),
+        (OP_CONST, "v = bitcast<f32>(a);".to_string()),
+        (OP_INPUT, format!("v = {inputs}[a];")),
+    ]);
+    dual_cases.extend([
+        (
+            OP_SELECT,
+            format!("d = select({}, {}, {}.x > 0.0);", r("c"), r("b"), r("a")),
+        ),
+        (OP_SKIP, skip),
+        (OP_CONST, "d = vec4<f32>(bitcast<f32>(a), 0.0, 0.0, 0.0);".to_string()),
+        (OP_INPUT, format!("d = vec4<f32>({inputs}[a], 0.0, 0.0, 0.0);")),
+    ]);
+    let value_dispatch = dispatch_tree(&mut value_cases, 2);
+    let dual_dispatch = dispatch_tree(&mut dual_cases, 2);
     // The loop head both interpreters share: fetch and decode one instruction.
     let fetch = format!(
         "    var pc = start;
@@ -517,48 +556,54 @@ pub fn interpreter(code: &str, inputs: &str) -> String {
 "
     );
     format!(
-        r#"var<private> iso_regs: array<f32, {MAX_INTERPRETED_SLOTS}>;
-var<private> iso_dregs: array<vec4<f32>, {MAX_INTERPRETED_SLOTS}>;
-fn iso_run(start: u32, len: u32, out: u32, p: vec3<f32>) -> f32 {{
-    iso_regs[0] = p.x;
-    iso_regs[1] = p.y;
-    iso_regs[2] = p.z;
+        r#"fn iso_run(start: u32, len: u32, out: u32, p: vec3<f32>) -> f32 {{
+    iso_regs[iso_reg_base].x = p.x;
+    iso_regs[iso_reg_base + 1u].x = p.y;
+    iso_regs[iso_reg_base + 2u].x = p.z;
 {fetch}        var v = 0.0;
         var write = true;
-        switch op {{
-{value_cases}            case {OP_SELECT}u: {{ v = select(iso_regs[c], iso_regs[b], iso_regs[a] > 0.0); }}
-            case {OP_SKIP}u: {{
-                write = false;
-                if (iso_regs[a] > 0.0) {{ pc += 4u * b; }}
-            }}
-            case {OP_CONST}u: {{ v = bitcast<f32>(a); }}
-            case {OP_INPUT}u: {{ v = {inputs}[a]; }}
-            default: {{ write = false; }}
-        }}
-        if (write) {{ iso_regs[o] = v; }}
+{value_dispatch}        if (write) {{ iso_regs[iso_reg_base + o].x = v; }}
     }}
-    return iso_regs[out];
+    return iso_regs[iso_reg_base + out].x;
 }}
 fn iso_run_dual(start: u32, len: u32, out: u32, p: vec3<f32>) -> vec4<f32> {{
-    iso_dregs[0] = vec4<f32>(p.x, 1.0, 0.0, 0.0);
-    iso_dregs[1] = vec4<f32>(p.y, 0.0, 1.0, 0.0);
-    iso_dregs[2] = vec4<f32>(p.z, 0.0, 0.0, 1.0);
-{fetch}        var r = vec4<f32>(0.0);
+    iso_regs[iso_reg_base] = vec4<f32>(p.x, 1.0, 0.0, 0.0);
+    iso_regs[iso_reg_base + 1u] = vec4<f32>(p.y, 0.0, 1.0, 0.0);
+    iso_regs[iso_reg_base + 2u] = vec4<f32>(p.z, 0.0, 0.0, 1.0);
+{fetch}        var d = vec4<f32>(0.0);
         var write = true;
-        switch op {{
-{dual_cases}            case {OP_SELECT}u: {{ r = select(iso_dregs[c], iso_dregs[b], iso_dregs[a].x > 0.0); }}
-            case {OP_SKIP}u: {{
-                write = false;
-                if (iso_dregs[a].x > 0.0) {{ pc += 4u * b; }}
-            }}
-            case {OP_CONST}u: {{ r = vec4<f32>(bitcast<f32>(a), 0.0, 0.0, 0.0); }}
-            case {OP_INPUT}u: {{ r = vec4<f32>({inputs}[a], 0.0, 0.0, 0.0); }}
-            default: {{ write = false; }}
-        }}
-        if (write) {{ iso_dregs[o] = r; }}
+{dual_dispatch}        if (write) {{ iso_regs[iso_reg_base + o] = d; }}
     }}
-    return iso_dregs[out];
+    return iso_regs[iso_reg_base + out];
 }}
 "#
     )
+}
+
+/// The interpreter's dispatch on `op` over `cases` (opcode, statement): a
+/// binary tree of `if`s, so that control flow nests about log2(cases)
+/// deep, not once per case as a `switch` lowered to an if-else chain does
+/// (lavapipe runs out of its nesting stack on such a chain inside the
+/// tracer's loops and then draws wrong pixels). An opcode not in `cases`
+/// writes nothing.
+fn dispatch_tree(cases: &mut [(u32, String)], depth: usize) -> String {
+    cases.sort_by_key(|c| c.0);
+    fn tree(cases: &[(u32, String)], depth: usize, out: &mut String) {
+        let pad = "    ".repeat(depth);
+        if let [(k, body)] = cases {
+            out.push_str(&format!(
+                "{pad}if (op == {k}u) {{ {body} }} else {{ write = false; }}\n"
+            ));
+            return;
+        }
+        let mid = cases.len() / 2;
+        out.push_str(&format!("{pad}if (op < {}u) {{\n", cases[mid].0));
+        tree(&cases[..mid], depth + 1, out);
+        out.push_str(&format!("{pad}}} else {{\n"));
+        tree(&cases[mid..], depth + 1, out);
+        out.push_str(&format!("{pad}}}\n"));
+    }
+    let mut out = String::new();
+    tree(cases, depth, &mut out);
+    out
 }

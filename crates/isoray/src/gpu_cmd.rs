@@ -3,16 +3,22 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use isoray_gpu::{GpuError, GpuRenderOptions, GpuRenderer};
+use isoray_gpu::{GpuError, GpuRenderOptions, GpuRenderer, Kernel};
 use isoray_job::Counter;
 use isoray_scene::Scene;
 
-use crate::{io_failure, jobs, Failure, Rendered};
+use crate::{io_failure, jobs, Failure, GpuKernel, HowToRender, Rendered};
 
 /// Renders on the GPU: the first Vulkan adapter (a real GPU before a
 /// software one), with a progress bar over the bands and, with `timing`,
 /// the pipeline build and each pass's GPU time on stderr.
-pub(crate) fn render_gpu(scene: &Scene, aovs: bool, timing: bool, quiet: bool) -> Result<Rendered, Failure> {
+pub(crate) fn render_gpu(scene: &Scene, aovs: bool, how: &HowToRender) -> Result<Rendered, Failure> {
+    let (timing, quiet) = (how.timing, how.quiet);
+    let kernel = match how.gpu_kernel {
+        GpuKernel::Auto => None,
+        GpuKernel::Compiled => Some(Kernel::Compiled),
+        GpuKernel::Interpreted => Some(Kernel::Interpreted),
+    };
     let start = Instant::now();
     let mut renderer = GpuRenderer::new().map_err(gpu_failure)?;
     let adapter = renderer.gpu().adapter_name();
@@ -22,12 +28,12 @@ pub(crate) fn render_gpu(scene: &Scene, aovs: bool, timing: bool, quiet: bool) -
         progress: Some(progress.clone()),
         cancel: Some(jobs::cancel_token()),
         timing,
-        kernel: None,
+        kernel,
     };
     let result = std::thread::scope(|sc| {
         let handle = sc.spawn(|| renderer.render(scene, &opts));
         if !quiet {
-            let total = isoray_gpu::band_count(scene);
+            let total = isoray_gpu::band_count(scene, kernel);
             crate::show_progress(&handle, &progress, total, start);
         }
         handle.join()
@@ -36,6 +42,9 @@ pub(crate) fn render_gpu(scene: &Scene, aovs: bool, timing: bool, quiet: bool) -
     let (image, stats, t) = result.map_err(gpu_failure)?;
     if timing {
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        if let Some(k) = t.kernel {
+            eprintln!("timing: {} kernel", k.name());
+        }
         match t.pipeline_build {
             Some(d) => eprintln!("timing: pipeline built in {:.1} ms", ms(d)),
             None => eprintln!("timing: pipeline reused"),

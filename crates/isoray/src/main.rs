@@ -38,6 +38,17 @@ enum Backend {
     Gpu,
 }
 
+/// How the GPU backend evaluates the objects' distances.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum GpuKernel {
+    /// The renderer's choice: compiled for small scenes, interpreted for large ones.
+    Auto,
+    /// Each object's tape compiled into the shader: the fastest frames.
+    Compiled,
+    /// One fixed shader interpreting the tapes: no shader compile per edit.
+    Interpreted,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene to a PNG (and optional EXR depth and normal AOVs).
@@ -79,6 +90,9 @@ enum Command {
         /// (timestamp queries) and the pipeline build time.
         #[arg(long)]
         timing: bool,
+        /// With `--backend gpu`: how the GPU evaluates distances.
+        #[arg(long, value_enum, default_value = "auto", value_name = "KERNEL")]
+        gpu_kernel: GpuKernel,
     },
     /// Read points `x y z` from stdin and print the scene's signed distance at each.
     Eval {
@@ -345,6 +359,7 @@ fn main() -> ExitCode {
             quiet,
             backend,
             timing,
+            gpu_kernel,
         } => {
             let mut overrides = Vec::new();
             overrides.extend(width.map(|w| format!("render.width={w}")));
@@ -361,6 +376,7 @@ fn main() -> ExitCode {
                 quiet,
                 backend,
                 timing,
+                gpu_kernel,
             };
             cmd_render(&input, &overrides, &outputs, &how)
         }
@@ -565,11 +581,12 @@ struct Outputs<'a> {
 }
 
 /// How `isoray render` runs: threads, output on the terminal, backend.
-struct HowToRender {
+pub(crate) struct HowToRender {
     threads: Option<usize>,
-    quiet: bool,
+    pub(crate) quiet: bool,
     backend: Backend,
-    timing: bool,
+    pub(crate) timing: bool,
+    pub(crate) gpu_kernel: GpuKernel,
 }
 
 /// A finished render and what the summary line says of it.
@@ -615,7 +632,7 @@ fn render_cpu(scene: &Scene, aovs: bool, threads: Option<usize>, quiet: bool) ->
 }
 
 #[cfg(not(feature = "gpu"))]
-fn render_gpu(_scene: &Scene, _aovs: bool, _timing: bool, _quiet: bool) -> Result<Rendered, Failure> {
+fn render_gpu(_scene: &Scene, _aovs: bool, _how: &HowToRender) -> Result<Rendered, Failure> {
     Err(io_failure(
         "this isoray was built without the GPU backend; build it with `cargo build --release -p isoray --features gpu`"
             .into(),
@@ -628,6 +645,7 @@ fn cmd_render(input: &SceneArgs, overrides: &[String], outputs: &Outputs, how: &
         quiet,
         backend,
         timing,
+        gpu_kernel,
     } = how;
     let Outputs {
         png: out,
@@ -649,6 +667,9 @@ fn cmd_render(input: &SceneArgs, overrides: &[String], outputs: &Outputs, how: &
     if timing && backend != Backend::Gpu {
         return Err(usage("--timing needs --backend gpu".into()));
     }
+    if gpu_kernel != GpuKernel::Auto && backend != Backend::Gpu {
+        return Err(usage("--gpu-kernel needs --backend gpu".into()));
+    }
     let scene = input.load(overrides)?;
     let aovs = depth.is_some() || normals.is_some() || albedo.is_some();
     let Rendered {
@@ -658,7 +679,7 @@ fn cmd_render(input: &SceneArgs, overrides: &[String], outputs: &Outputs, how: &
         backend,
     } = match backend {
         Backend::Cpu => render_cpu(&scene, aovs, threads, quiet)?,
-        Backend::Gpu => render_gpu(&scene, aovs, timing, quiet)?,
+        Backend::Gpu => render_gpu(&scene, aovs, how)?,
     };
     let w = |r: Result<(), output::OutputError>| r.map_err(|e| io_failure(e.to_string()));
     w(output::write_png(out, image.width, image.height, &image.color))?;

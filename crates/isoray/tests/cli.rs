@@ -629,12 +629,23 @@ fn the_backend_flag() {
     let o = run(isoray()
         .arg("render")
         .arg(&scene)
+        .args(["--width", "32", "--height", "18", "--gpu-kernel", "interpreted", "-o"])
+        .arg(&out));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--gpu-kernel needs --backend gpu"),
+        "{}",
+        stderr(&o)
+    );
+    let o = run(isoray()
+        .arg("render")
+        .arg(&scene)
         .args(["--width", "32", "--height", "18", "--backend", "gpu", "--timing", "-o"])
         .arg(&out));
     if cfg!(feature = "gpu") {
         assert!(o.status.success(), "{}", stderr(&o));
         let e = stderr(&o);
-        assert!(e.contains(" on gpu ") && e.contains("timing: "), "{e}");
+        assert!(e.contains(" on gpu ") && e.contains("timing: compiled kernel"), "{e}");
     } else {
         assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
         assert!(stderr(&o).contains("--features gpu"), "{}", stderr(&o));
