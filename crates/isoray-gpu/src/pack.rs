@@ -4,14 +4,16 @@
 
 use isoray_scene::analytic::Analytic;
 use isoray_scene::env::{EnvMap, RgbImage};
-use isoray_scene::{LightKind, NormalMethod, Projection, Scene, ShadowMode, View};
+use isoray_scene::{
+    AoTarget, AoWeights, LightKind, NormalMethod, Projection, Scene, ShadowMode, ShadowTarget, StepLimit, View,
+};
 use isoray_shade::MaterialSample;
 use isoray_shape::wgsl::{
     emit_tape, emit_tape_dual, encode_tape, interpreter, WgslFunction, MAX_INTERPRETED_SLOTS, PRELUDE,
 };
 
 /// Words of `Settings` in `render.wgsl`.
-pub(crate) const SETTINGS_WORDS: usize = 60;
+pub(crate) const SETTINGS_WORDS: usize = 68;
 /// Words of one `Light`.
 const LIGHT_WORDS: usize = 20;
 /// Words of one `Mat`.
@@ -284,6 +286,7 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch) 
         ShadowMode::Hard => 1,
         ShadowMode::Soft => 2,
         ShadowMode::Improved => 3,
+        ShadowMode::Aaltonen => 4,
     };
     let view = match r.view {
         View::Shaded => 0,
@@ -344,6 +347,11 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch) 
         .u(record)
         .u(scratch.stack_cap)
         .u(scratch.reg_slots);
+    out.u((r.on_step_limit == StepLimit::Miss) as u32)
+        .f(r.shadow_floor as f32)
+        .u((r.shadow_applies_to == ShadowTarget::All) as u32)
+        .u((r.ao_weights == AoWeights::Uniform) as u32);
+    out.u((r.ao_applies_to == AoTarget::All) as u32).d3(r.ambient);
     debug_assert_eq!(out.0.len(), SETTINGS_WORDS);
     out
 }

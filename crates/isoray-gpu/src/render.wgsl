@@ -22,6 +22,8 @@ struct Settings {
     up_x: f32, up_y: f32, up_z: f32, n_clear: u32,
     env_kind: u32, env_cos: f32, env_sin: f32, env_k: f32,
     any_analytic: u32, record: u32, stack_cap: u32, reg_slots: u32,
+    step_limit_miss: u32, shadow_floor: f32, shadow_all: u32, ao_uniform: u32,
+    ao_all: u32, amb_r: f32, amb_g: f32, amb_b: f32,
 }
 
 struct Light {
@@ -284,7 +286,9 @@ fn sphere_trace(kind: u32, o: vec3<f32>, dir: vec3<f32>, cap: f32) -> Hit {
             t = iso_inf();
             break;
         } else if (step >= cfg.max_steps) {
-            break; // out of steps inside the range: a grazing hit
+            // Out of steps inside the range: a grazing hit, or a miss.
+            if (cfg.step_limit_miss != 0u) { t = iso_inf(); }
+            break;
         }
     }
     return Hit(t, step);
@@ -329,6 +333,7 @@ const SH_NONE: u32 = 0u;
 const SH_HARD: u32 = 1u;
 const SH_SOFT: u32 = 2u;
 const SH_IMPROVED: u32 = 3u;
+const SH_AALTONEN: u32 = 4u;
 
 fn shadow_march(kind: u32, o: vec3<f32>, l: vec3<f32>, tmax: f32, mode: u32, size: f32) -> f32 {
     var vis = 1.0;
@@ -338,11 +343,23 @@ fn shadow_march(kind: u32, o: vec3<f32>, l: vec3<f32>, tmax: f32, mode: u32, siz
     let min_step = max(0.5 * start, eps);
     var t = start;
     if (!(start < tmax)) { return 1.0; }
+    var ph = 1e20; // Aaltonen's: the previous step's distance
     for (var step = 0u; step < cfg.shadow_max_steps; step++) {
         let d = field(kind, o + l * t);
         var keep = true;
         if (mode == SH_HARD) {
             if (d < eps) { vis = 0.0; keep = false; } else { t += d; }
+        } else if (mode == SH_AALTONEN) {
+            if (d < eps) {
+                vis = 0.0;
+                keep = false;
+            } else {
+                let y = d * d / (2.0 * ph);
+                let dd = sqrt(max(d * d - y * y, 0.0));
+                vis = iso_min(vis, dd / (size * max(t - y, 0.0)));
+                ph = d;
+                t += d;
+            }
         } else if (mode == SH_SOFT) {
             if (d < eps) {
                 vis = 0.0;
@@ -358,7 +375,7 @@ fn shadow_march(kind: u32, o: vec3<f32>, l: vec3<f32>, tmax: f32, mode: u32, siz
         }
         if (!(keep && t < tmax)) { break; }
     }
-    if (mode == SH_SOFT) { return clamp(vis, 0.0, 1.0); }
+    if (mode == SH_SOFT || mode == SH_AALTONEN) { return clamp(vis, 0.0, 1.0); }
     if (mode == SH_IMPROVED) {
         let r = clamp(vis, -1.0, 1.0);
         return 0.25 * (1.0 + r) * (1.0 + r) * (2.0 - r);
@@ -762,7 +779,9 @@ fn ambient_occlusion(p: vec3<f32>, n: vec3<f32>) -> f32 {
         let h = cfg.ao_step * f32(i);
         w *= 0.5;
         let d = field(F_SCENE, p + n * h);
-        occ += (w / wsum) * (h - d) / h;
+        var wi = w / wsum;
+        if (cfg.ao_uniform != 0u) { wi = 1.0; }
+        occ += wi * (h - d) / h;
     }
     return clamp(1.0 - cfg.ao_intensity * occ, 0.0, 1.0);
 }
@@ -770,7 +789,14 @@ fn ambient_occlusion(p: vec3<f32>, n: vec3<f32>) -> f32 {
 fn shade(p: vec3<f32>, n: vec3<f32>, dir: vec3<f32>, s: Mat, local: vec3<f32>, media: Media, seed: u32) -> vec3<f32> {
     var ao = ambient_occlusion(p, n);
     if (media.len > 0u) { ao = 1.0; }
-    var color = s.emission + local * s.ambient * ao;
+    // The Unity thesis's conventions: AO and shadows may darken the whole
+    // colour (`factor`) instead of the ambient and direct terms.
+    var a = ao;
+    if (cfg.ao_all != 0u) { a = 1.0; }
+    let ambient_light = vec3<f32>(cfg.amb_r, cfg.amb_g, cfg.amb_b);
+    var color = s.emission + local * s.ambient * a + local * ambient_light * s.diffuse * a;
+    let shadow_all = cfg.shadow_all != 0u && cfg.shadows != SH_NONE;
+    var factor = 1.0;
     let v = -dir;
     var occluders = F_SCENE;
     if (cfg.n_clear > 0u) { occluders = F_OPAQUE; }
@@ -782,10 +808,14 @@ fn shade(p: vec3<f32>, n: vec3<f32>, dir: vec3<f32>, s: Mat, local: vec3<f32>, m
         var mode = cfg.shadows;
         if (area && cfg.shadows != SH_NONE) { mode = SH_HARD; }
         let radiance = vec3<f32>(light.cr, light.cg, light.cb) * (light.intensity / f32(ns));
+        var light_factor = 0.0;
         for (var j = 0u; j < ns; j++) {
             let inc = light_sample(light, p, j, ns, seed + li * 0x9E3779B9u);
             let l = inc.dir;
-            if (!(dot3(n, l) > 0.0)) { continue; }
+            if (!(dot3(n, l) > 0.0)) {
+                light_factor += cfg.shadow_floor / f32(ns);
+                continue;
+            }
             let o = p + n * (2.0 * cfg.hit_eps);
             let tmax = min(inc.dist, cfg.shadow_max_dist);
             var vis = shadow_march(occluders, o, l, tmax, mode, light.size);
@@ -796,12 +826,19 @@ fn shade(p: vec3<f32>, n: vec3<f32>, dir: vec3<f32>, s: Mat, local: vec3<f32>, m
             if (mode != SH_NONE) {
                 n_shadow += 1u;
                 if (cfg.shadow_exponent != 1.0) { vis = iso_pow(vis, cfg.shadow_exponent); }
+                vis = cfg.shadow_floor + (1.0 - cfg.shadow_floor) * vis;
+            }
+            if (shadow_all) {
+                light_factor += vis / f32(ns);
+                vis = 1.0;
             }
             let arriving = radiance * inc.attenuation * vis * through;
             color += direct_light(s, n, v, l, local, arriving);
         }
+        if (shadow_all) { factor *= light_factor; }
     }
-    return color;
+    if (cfg.ao_all != 0u) { factor *= ao; }
+    return color * factor;
 }
 
 // ---- paths (isoray-render's whitted module), depth first ----

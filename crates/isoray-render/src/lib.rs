@@ -794,9 +794,22 @@ impl<'s> Worker<'s> {
         }
         let pos = |k: usize| Vec3::new(hs.px[k], hs.py[k], hs.pz[k]);
         let nrm = |k: usize| Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]);
+        // The Unity thesis's conventions: AO and shadows may darken the
+        // whole colour (`factor`) instead of the ambient and direct terms.
+        let ao_all = s.ao_applies_to == isoray_scene::AoTarget::All;
+        let shadow_all = s.shadow_applies_to == isoray_scene::ShadowTarget::All && s.shadows != ShadowMode::None;
+        let ambient_light = Vec3::from_array(s.ambient.map(|x| x as f32));
+        let mut factor = vec![1.0f32; m];
         let mut color: Vec<Vec3> = (0..m)
-            .map(|k| phong::emitted_and_ambient(&surfaces[k], local[k], ao[k]))
+            .map(|k| {
+                let a = if ao_all { 1.0 } else { ao[k] };
+                phong::emitted_and_ambient(&surfaces[k], local[k], a)
+                    + local[k] * ambient_light * surfaces[k].diffuse * a
+            })
             .collect();
+        let floor = s.shadow_floor as f32;
+        // With `shadow_applies_to = "all"`: each light's mean factor over its samples.
+        let mut light_factor = vec![0.0f32; m];
 
         let mut shadow_rays = Rays::default();
         let mut tmax = Vec::new();
@@ -893,17 +906,38 @@ impl<'s> Worker<'s> {
             if mode != ShadowMode::None {
                 self.counts.shadow += shadow_rays.len() as u64;
             }
+            let mut lit = vec![floor; if shadow_all { m } else { 0 }];
             for (r, &k) in which.iter().enumerate() {
                 let i = hs.idx[k];
                 let v = -Vec3::new(self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]);
                 let mut sh = vis[r];
-                if mode != ShadowMode::None && s.shadow_exponent != 1.0 {
-                    sh = sh.powf(s.shadow_exponent as f32);
+                if mode != ShadowMode::None {
+                    if s.shadow_exponent != 1.0 {
+                        sh = sh.powf(s.shadow_exponent as f32);
+                    }
+                    sh = floor + (1.0 - floor) * sh;
+                }
+                if shadow_all {
+                    lit[k] = sh;
+                    sh = 1.0;
                 }
                 let through = transmitted.as_ref().map_or(Vec3::ONE, |t| t[r]);
                 let arriving = radiance * atten[k] * sh * through;
                 color[k] += phong::direct_light(&surfaces[k], nrm(k), v, dirs[k], local[k], arriving);
             }
+            if shadow_all {
+                for k in 0..m {
+                    light_factor[k] += lit[k] / n as f32;
+                    if j + 1 == n {
+                        factor[k] *= light_factor[k];
+                        light_factor[k] = 0.0;
+                    }
+                }
+            }
+        }
+        for k in 0..m {
+            let a = if ao_all { ao[k] } else { 1.0 };
+            color[k] *= factor[k] * a;
         }
         color
     }
@@ -1000,11 +1034,12 @@ impl<'s> Worker<'s> {
         let mut ds = vec![0.0f32; m * n];
         self.scene_eval.eval(&xs, &ys, &zs, &mut ds);
         *evals += (m * n) as u64;
+        let uniform = s.ao_weights == isoray_scene::AoWeights::Uniform;
         let wsum: f32 = (1..=n).map(|i| 0.5f32.powi(i as i32)).sum();
         let mut occ = vec![0.0f32; m];
         for i in 1..=n {
             let h = step * i as f32;
-            let w = 0.5f32.powi(i as i32) / wsum;
+            let w = if uniform { 1.0 } else { 0.5f32.powi(i as i32) / wsum };
             for k in 0..m {
                 occ[k] += w * (h - ds[(i - 1) * m + k]) / h;
             }

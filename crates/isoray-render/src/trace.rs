@@ -2,7 +2,7 @@
 //! evaluates the distance of all still-active rays with one batch call, so the
 //! shape tape runs over structure-of-arrays blocks (the hot path).
 
-use isoray_scene::{RenderSettings, ShadowMode};
+use isoray_scene::{RenderSettings, ShadowMode, StepLimit};
 use isoray_shape::{BatchEvaluator, GradientMode, Tape};
 
 /// A distance field ready to evaluate in a frame: a batch evaluator of its
@@ -209,8 +209,10 @@ pub fn sphere_trace_capped(
                 h.t = f32::INFINITY;
             } else if step < s.max_steps {
                 scratch.next.push(i);
+            } else if s.on_step_limit == StepLimit::Miss {
+                h.t = f32::INFINITY;
             }
-            // Out of steps while still inside the range: accept as a hit (the
+            // Otherwise out of steps while still inside the range: a hit (the
             // ray is grazing a surface), as most sphere tracers do.
         }
         std::mem::swap(&mut scratch.active, &mut scratch.next);
@@ -242,6 +244,8 @@ pub fn shadow_march(
     let start = s.shadow_start as f32;
     let min_step = (0.5 * start).max(eps);
     let mut t = vec![start; n];
+    // Aaltonen's estimate: the previous step's distance.
+    let mut ph = vec![1e20f32; if mode == ShadowMode::Aaltonen { n } else { 0 }];
     let mut evals = 0u64;
     scratch.active.clear();
     scratch
@@ -283,6 +287,24 @@ pub fn shadow_march(
                     t[i] += d.max(min_step);
                     vis[i] > -1.0
                 }
+                ShadowMode::Aaltonen => {
+                    if d < eps {
+                        vis[i] = 0.0;
+                        false
+                    } else {
+                        // The closest approach between this sphere and the
+                        // previous one: y along the ray, dd across it.
+                        let y = d * d / (2.0 * ph[i]);
+                        let dd = (d * d - y * y).max(0.0).sqrt();
+                        let est = dd / (size * (ti - y).max(0.0));
+                        if !est.is_nan() {
+                            vis[i] = vis[i].min(est);
+                        }
+                        ph[i] = d;
+                        t[i] += d;
+                        true
+                    }
+                }
                 ShadowMode::None => false,
             };
             if keep && t[i] < tmax[i] {
@@ -292,7 +314,7 @@ pub fn shadow_march(
         std::mem::swap(&mut scratch.active, &mut scratch.next);
     }
     match mode {
-        ShadowMode::Soft => vis.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0)),
+        ShadowMode::Soft | ShadowMode::Aaltonen => vis.iter_mut().for_each(|v| *v = v.clamp(0.0, 1.0)),
         ShadowMode::Improved => vis.iter_mut().for_each(|v| {
             let r = v.clamp(-1.0, 1.0);
             *v = 0.25 * (1.0 + r) * (1.0 + r) * (2.0 - r);

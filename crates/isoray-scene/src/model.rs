@@ -135,6 +135,62 @@ pub enum ShadowMode {
     Soft,
     /// Penumbra estimate that tolerates slight penetration (smooth, no banding).
     Improved,
+    /// Sebastian Aaltonen's improved soft shadow: the closest approach
+    /// estimated from two successive distances (fewer artefacts at corners).
+    Aaltonen,
+}
+
+/// What a ray that runs out of sphere-tracing steps inside the range is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepLimit {
+    /// A hit where it stopped (it is grazing a surface): most sphere tracers.
+    Hit,
+    /// A miss (the background): Unity's, Shadertoy's and Godot's raymarchers.
+    Miss,
+}
+
+/// What a shadow factor multiplies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShadowTarget {
+    /// The light's own direct term.
+    Direct,
+    /// The whole colour of the point (each light's factor in turn), as the
+    /// Unity thesis does.
+    All,
+}
+
+/// What the ambient-occlusion factor multiplies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AoTarget {
+    /// The ambient terms.
+    Ambient,
+    /// The whole colour of the point, as the Unity thesis does.
+    All,
+}
+
+/// How the ambient-occlusion samples are weighted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AoWeights {
+    /// Sample i weighs 2⁻ⁱ (normalised): near samples count most.
+    Halving,
+    /// Every sample weighs 1 (their sum, unweighted), as the Unity thesis does.
+    Uniform,
+}
+
+impl Named for StepLimit {
+    const NAMES: &'static [(&'static str, Self)] = &[("hit", StepLimit::Hit), ("miss", StepLimit::Miss)];
+}
+
+impl Named for ShadowTarget {
+    const NAMES: &'static [(&'static str, Self)] = &[("direct", ShadowTarget::Direct), ("all", ShadowTarget::All)];
+}
+
+impl Named for AoTarget {
+    const NAMES: &'static [(&'static str, Self)] = &[("ambient", AoTarget::Ambient), ("all", AoTarget::All)];
+}
+
+impl Named for AoWeights {
+    const NAMES: &'static [(&'static str, Self)] = &[("halving", AoWeights::Halving), ("uniform", AoWeights::Uniform)];
 }
 
 /// What the image shows.
@@ -168,6 +224,7 @@ impl Named for ShadowMode {
         ("hard", ShadowMode::Hard),
         ("soft", ShadowMode::Soft),
         ("improved", ShadowMode::Improved),
+        ("aaltonen", ShadowMode::Aaltonen),
     ];
 }
 
@@ -238,6 +295,18 @@ settings! {
         max_depth: u32 = 5, int(0, 64), "bounces of reflected and refracted rays after the primary hit";
         /// Secondary rays whose weight (largest channel) falls below this stop.
         min_weight: f64 = 1e-3, num(WEIGHT), "a reflected or refracted ray whose weight (largest channel) is below this is not traced";
+        /// A ray out of steps inside the range: a hit or a miss.
+        on_step_limit: StepLimit = StepLimit::Hit, choice::<StepLimit>(), "a primary or secondary ray that runs out of `max_steps` before `max_distance`: `\"hit\"` (it is grazing a surface) or `\"miss\"` (the background, as Unity-style raymarchers do)";
+        /// Shadow factors never go below this: S' = floor + (1 − floor)·S.
+        shadow_floor: f64 = 0.0, num(WEIGHT), "the least a shadow lets through: S' = floor + (1 − floor)·S (the Unity thesis: 0.5)";
+        /// What a light's shadow factor multiplies.
+        shadow_applies_to: ShadowTarget = ShadowTarget::Direct, choice::<ShadowTarget>(), "what a light's shadow factor multiplies: `\"direct\"` (its own light) or `\"all\"` (the whole colour of the point; a point facing away from the light is in its shadow)";
+        /// How the AO samples are weighted.
+        ao_weights: AoWeights = AoWeights::Halving, choice::<AoWeights>(), "AO sample weights: `\"halving\"` (sample i weighs 2⁻ⁱ, normalised) or `\"uniform\"` (1 each: the plain sum, as the Unity thesis)";
+        /// What the AO factor multiplies.
+        ao_applies_to: AoTarget = AoTarget::Ambient, choice::<AoTarget>(), "what ambient occlusion darkens: `\"ambient\"` (the ambient terms) or `\"all\"` (the whole colour)";
+        /// A scene-wide ambient light, times each material's diffuse colour.
+        ambient: Vec3 = [0.0, 0.0, 0.0], colour(), "a scene-wide ambient light (linear RGB) added as `ambient × diffuse` at every point, besides each material's own `ambient`";
         /// Intersect objects that are exactly planes or spheres in closed
         /// form (not with `blend` > 0 or the steps view).
         analytic: bool = true, boolean(), "objects whose distance is exactly a plane's or a sphere's (recognised numerically, whatever the text) are intersected in closed form and the other objects are marched up to them; not with `blend` > 0 or `view = \"steps\"`";

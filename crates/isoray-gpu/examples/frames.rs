@@ -1,0 +1,181 @@
+//! Frame times of the GPU renderer (and the CPU renderer beside it), for
+//! `bench/gpu/lavapipe.sh` and `bench/gpu/device.sh`.
+//!
+//! ```text
+//! frames SCENE [--size WxH] [--frames N] [--warmup K] [--cpu N] [--latency]
+//!        [--label TEXT] [--set KEY=VALUE]...
+//! ```
+//!
+//! Prints one tab-separated line: label, size, the median GPU time of the
+//! frames' passes (timestamp queries; `-` without them), the median frame
+//! wall time on the host, and with `--cpu N` the median of N CPU renders
+//! in the same process. With `--latency` it also prints the time from a
+//! parameter change (the first `[params]` entry, else the time) to the
+//! next finished frame, and from a structural edit (a new object) to the
+//! next finished frame, pipeline build included.
+
+use std::time::{Duration, Instant};
+
+use isoray_gpu::{GpuRenderOptions, GpuRenderer};
+use isoray_scene::Scene;
+use isoray_shape::Value;
+
+struct Args {
+    scene: String,
+    size: Option<(u32, u32)>,
+    frames: usize,
+    warmup: usize,
+    cpu: usize,
+    latency: bool,
+    label: String,
+    sets: Vec<String>,
+}
+
+fn parse() -> Result<Args, String> {
+    let mut it = std::env::args().skip(1);
+    let mut a = Args {
+        scene: String::new(),
+        size: None,
+        frames: 100,
+        warmup: 10,
+        cpu: 0,
+        latency: false,
+        label: String::new(),
+        sets: Vec::new(),
+    };
+    let num = |v: Option<String>, what: &str| -> Result<usize, String> {
+        v.ok_or(format!("{what} needs a value"))?
+            .parse()
+            .map_err(|e| format!("{what}: {e}"))
+    };
+    while let Some(x) = it.next() {
+        match x.as_str() {
+            "--size" => {
+                let v = it.next().ok_or("--size needs WxH")?;
+                let (w, h) = v.split_once('x').ok_or("--size is WxH")?;
+                a.size = Some((
+                    w.parse().map_err(|_| "bad width")?,
+                    h.parse().map_err(|_| "bad height")?,
+                ));
+            }
+            "--frames" => a.frames = num(it.next(), "--frames")?.max(1),
+            "--warmup" => a.warmup = num(it.next(), "--warmup")?,
+            "--cpu" => a.cpu = num(it.next(), "--cpu")?,
+            "--latency" => a.latency = true,
+            "--label" => a.label = it.next().ok_or("--label needs text")?,
+            "--set" => a.sets.push(it.next().ok_or("--set needs KEY=VALUE")?),
+            s if a.scene.is_empty() && !s.starts_with('-') => a.scene = s.to_string(),
+            s => return Err(format!("unexpected argument `{s}`")),
+        }
+    }
+    if a.scene.is_empty() {
+        return Err("usage: frames SCENE [--size WxH] [--frames N] [--warmup K] [--cpu N] [--latency] [--label TEXT] [--set KEY=VALUE]...".into());
+    }
+    Ok(a)
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn run() -> Result<(), String> {
+    let a = parse()?;
+    let mut sets = a.sets.clone();
+    if let Some((w, h)) = a.size {
+        sets.push(format!("render.width={w}"));
+        sets.push(format!("render.height={h}"));
+    }
+    let mut scene = isoray_scene::load(std::path::Path::new(&a.scene), &sets).map_err(|e| e.rendered)?;
+    let mut gpu = GpuRenderer::new().map_err(|e| e.to_string())?;
+    let opts = GpuRenderOptions {
+        timing: true,
+        ..Default::default()
+    };
+    let frame = |gpu: &mut GpuRenderer, scene: &Scene| gpu.render(scene, &opts).map_err(|e| e.to_string());
+    let (_, _, first) = frame(&mut gpu, &scene)?;
+    let build = first.pipeline_build.map_or(0.0, ms);
+    for _ in 0..a.warmup {
+        frame(&mut gpu, &scene)?;
+    }
+    let mut gpu_ms = Vec::new();
+    let mut wall_ms = Vec::new();
+    for _ in 0..a.frames {
+        let (_, _, t) = frame(&mut gpu, &scene)?;
+        if let Some(g) = t.gpu_ms() {
+            gpu_ms.push(g);
+        }
+        wall_ms.push(ms(t.wall));
+    }
+    let cpu = (a.cpu > 0).then(|| {
+        let times: Vec<f64> = (0..a.cpu)
+            .map(|_| {
+                let start = Instant::now();
+                let _ = isoray_render::render(&scene, &Default::default());
+                ms(start.elapsed())
+            })
+            .collect();
+        median(times)
+    });
+    let r = &scene.render;
+    let fmt = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.3}"));
+    println!(
+        "{}\t{}x{}\tgpu_ms={}\twall_ms={:.3}\tcpu_ms={}\tbuild_ms={build:.0}\tadapter={}",
+        if a.label.is_empty() { &a.scene } else { &a.label },
+        r.width,
+        r.height,
+        fmt((!gpu_ms.is_empty()).then(|| median(gpu_ms.clone()))),
+        median(wall_ms),
+        fmt(cpu),
+        gpu.gpu().adapter_name()
+    );
+    if a.latency {
+        // A parameter change: new buffers, the same pipeline.
+        let param = scene.library.params().iter().find_map(|(n, v)| match v {
+            Value::Float(x) => Some((n.clone(), *x)),
+            _ => None,
+        });
+        let start = Instant::now();
+        match &param {
+            Some((name, v)) => scene
+                .set_param(name, Value::Float(v * 1.01 + 0.01))
+                .map_err(|e| e.rendered)?,
+            None => scene.set_time(0.25).map_err(|e| e.rendered)?,
+        }
+        let (_, _, t) = frame(&mut gpu, &scene)?;
+        let what = param.map_or("time".to_string(), |(n, _)| format!("params.{n}"));
+        println!(
+            "latency\tparameter change ({what}) to finished frame: {:.1} ms (pipeline {})",
+            ms(start.elapsed()),
+            if t.pipeline_build.is_some() {
+                "rebuilt"
+            } else {
+                "reused"
+            }
+        );
+        // A structural edit: one more object (a new shape text), so a new pipeline.
+        let path = std::path::Path::new(&a.scene);
+        let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
+        let edited = format!("{text}\n[[object]]\nshape = \"sphere(p - vec3(0.0, 4.0, -3.0), 0.5)\"\n");
+        let start = Instant::now();
+        let scene2 = isoray_scene::load_str(&edited, &a.scene, &sets).map_err(|e| e.rendered)?;
+        let (_, _, t) = frame(&mut gpu, &scene2)?;
+        println!(
+            "latency\tstructural edit (a new object) to finished frame: {:.1} ms (pipeline build {:.1} ms)",
+            ms(start.elapsed()),
+            t.pipeline_build.map_or(0.0, ms)
+        );
+    }
+    Ok(())
+}

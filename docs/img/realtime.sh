@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Renders the pictures of docs/SCENE.md §9.9 (the Unity thesis's
+# conventions and Aaltonen's shadow) from examples/realtime/primitives.toml.
+#   bash docs/img/realtime.sh
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+cargo build --release -q -p isoray
+I=target/release/isoray
+S="examples/realtime/primitives.toml --width 480 --height 270 -q"
+$I render $S -o docs/img/unity_conventions.png
+$I render $S -o docs/img/isoray_conventions.png --set render.shadow_floor=0 \
+  --set 'render.shadow_applies_to="direct"' --set 'render.ao_applies_to="ambient"' \
+  --set 'render.ao_weights="halving"' --set 'render.on_step_limit="hit"'
+$I render $S -o docs/img/shadows_soft_primitives.png --set render.shadow_floor=0 --set 'render.shadow_applies_to="direct"' --set 'light.0.size=0.4'
+$I render $S -o docs/img/shadows_aaltonen.png --set render.shadow_floor=0 --set 'render.shadow_applies_to="direct"' --set 'light.0.size=0.4' --set 'render.shadows="aaltonen"'
