@@ -13,3 +13,8 @@ $I render $S -o docs/img/isoray_conventions.png --set render.shadow_floor=0 \
   --set 'render.ao_weights="halving"' --set 'render.on_step_limit="hit"'
 $I render $S -o docs/img/shadows_soft_primitives.png --set render.shadow_floor=0 --set 'render.shadow_applies_to="direct"' --set 'light.0.size=0.4'
 $I render $S -o docs/img/shadows_aaltonen.png --set render.shadow_floor=0 --set 'render.shadow_applies_to="direct"' --set 'light.0.size=0.4' --set 'render.shadows="aaltonen"'
+# The debug views of §9.7.
+$I render examples/gallery.toml --width 320 --height 180 -q --set 'render.view="uv"' -o docs/img/view_uv.png
+for v in mask gradient; do
+  $I render examples/algebraic.toml --width 320 --height 180 -q --set "render.view=\"$v\"" -o "docs/img/view_$v.png"
+done

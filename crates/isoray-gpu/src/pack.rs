@@ -292,6 +292,9 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch) 
         View::Shaded => 0,
         View::Steps => 1,
         View::Normals => 2,
+        View::Uv => 3,
+        View::Mask => 4,
+        View::Gradient => 5,
     };
     let n_clear = scene
         .objects

@@ -295,7 +295,7 @@ fn sphere_trace(kind: u32, o: vec3<f32>, dir: vec3<f32>, cap: f32) -> Hit {
 }
 
 // A traced ray: its hit, and at a hit the point and the normal facing the ray.
-struct Traced { t: f32, steps: u32, p: vec3<f32>, n: vec3<f32> }
+struct Traced { t: f32, steps: u32, p: vec3<f32>, n: vec3<f32>, gnorm: f32 }
 
 fn trace(o: vec3<f32>, d: vec3<f32>, inside: bool) -> Traced {
     // One call of each (the GPU compiler inlines every call of a field).
@@ -308,7 +308,7 @@ fn trace(o: vec3<f32>, d: vec3<f32>, inside: bool) -> Traced {
         cap = analytic_cap(o, d);
     }
     let h = sphere_trace(kind, o, d, cap);
-    var r = Traced(h.t, h.steps, vec3<f32>(0.0), vec3<f32>(0.0));
+    var r = Traced(h.t, h.steps, vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
     if (!(abs(h.t) < iso_inf())) { return r; }
     r.p = o + d * h.t;
     // Inside, the field is unsigned: normals from dual numbers.
@@ -318,7 +318,9 @@ fn trace(o: vec3<f32>, d: vec3<f32>, inside: bool) -> Traced {
         gkind = F_SURFACES;
         mode = N_DUAL;
     }
-    var n = normalize_or_zero(gradient(gkind, r.p, mode));
+    let g = gradient(gkind, r.p, mode);
+    r.gnorm = sqrt(dot3(g, g));
+    var n = normalize_or_zero(g);
     if (n.x == 0.0 && n.y == 0.0 && n.z == 0.0) {
         n = -d;
     } else if (dot3(n, d) > 0.0) {
@@ -899,10 +901,10 @@ fn touching(p: vec3<f32>, nearest: u32) -> Touching {
 
 // What a path gives: its colour, or with `first` the primary hit alone
 // (its distance, steps, normal and albedo; nothing is shaded).
-struct PathResult { color: vec3<f32>, t: f32, steps: u32, n: vec3<f32>, albedo: vec3<f32> }
+struct PathResult { color: vec3<f32>, t: f32, steps: u32, n: vec3<f32>, albedo: vec3<f32>, gnorm: f32 }
 
 fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult {
-    var res = PathResult(vec3<f32>(0.0), iso_inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
+    var res = PathResult(vec3<f32>(0.0), iso_inf(), 0u, vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
     var sum = vec3<f32>(0.0);
     var top = 0u;
     var m0: Media;
@@ -916,6 +918,7 @@ fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult
             res.t = h.t;
             res.steps = h.steps;
             res.n = h.n;
+            res.gnorm = h.gnorm;
         }
         if (!(abs(h.t) < iso_inf())) {
             if (!inside) { sum += ray.w * sky(ray.d); }
@@ -1014,6 +1017,26 @@ fn heat(x0: f32) -> vec3<f32> {
 const V_SHADED: u32 = 0u;
 const V_STEPS: u32 = 1u;
 const V_NORMALS: u32 = 2u;
+const V_UV: u32 = 3u;
+const V_MASK: u32 = 4u;
+const V_GRADIENT: u32 = 5u;
+
+// isoray-render's uv_colour: the image-plane coordinates of a camera ray
+// as red and green, darkened on a grid every 0.25.
+fn uv_colour(d: vec3<f32>) -> vec3<f32> {
+    let fwd = vec3<f32>(cfg.fwd_x, cfg.fwd_y, cfg.fwd_z);
+    let right = vec3<f32>(cfg.right_x, cfg.right_y, cfg.right_z);
+    let up = vec3<f32>(cfg.up_x, cfg.up_y, cfg.up_z);
+    let z = dot3(d, fwd) * cfg.tan_half;
+    let u = dot3(d, right) / z;
+    let v = dot3(d, up) / z;
+    let c = vec3<f32>(clamp(0.5 + 0.5 * u / cfg.aspect, 0.0, 1.0), clamp(0.5 + 0.5 * v, 0.0, 1.0), 0.25);
+    let lines = 2.9 / f32(cfg.height);
+    let ou = abs(4.0 * u - iso_round(4.0 * u));
+    let ov = abs(4.0 * v - iso_round(4.0 * v));
+    if (ou < lines || ov < lines) { return c * 0.25; }
+    return c;
+}
 
 fn put(base: u32, k: u32, v: f32) { out[base + k] = bitcast<u32>(v); }
 
@@ -1065,7 +1088,13 @@ fn render_pixel(x: u32, y: u32, base: u32) {
             sum += r.color;
         } else if (cfg.view == V_STEPS) {
             sum += heat(f32(r.steps) / f32(cfg.max_steps));
-        } else if (abs(r.t) < iso_inf()) {
+        } else if (cfg.view == V_UV) {
+            sum += uv_colour(d);
+        } else if (cfg.view == V_MASK) {
+            if (abs(r.t) < iso_inf()) { sum += vec3<f32>(1.0); }
+        } else if (cfg.view == V_GRADIENT && abs(r.t) < iso_inf()) {
+            sum += heat(0.5 * r.gnorm);
+        } else if (cfg.view == V_NORMALS && abs(r.t) < iso_inf()) {
             sum += r.n * 0.5 + 0.5;
         } else {
             sum += bg;

@@ -201,3 +201,36 @@ shape = "torus(rotate_x(p - vec3(0.9, 0.6, 0.0), 1.2), 0.5, 0.18)"
     // The depth bound is twice the examples' (one grazing pixel at 1.1e-3).
     assert!(p.over <= 0.01 && p.mean < 1.0 && p.depth <= 2e-3, "{p:?}");
 }
+
+/// The debug views and the shadow modes (settings: one pipeline for all)
+/// draw on the GPU what they draw on the CPU.
+#[test]
+fn every_view_and_shadow_mode_renders_as_on_the_cpu() {
+    let mut gpu = GpuRenderer::new().unwrap_or_else(|e| panic!("{e}"));
+    let path = root().join("examples/algebraic.toml");
+    let mut failures = Vec::new();
+    let sets = [
+        "render.view=\"uv\"",
+        "render.view=\"mask\"",
+        "render.view=\"gradient\"",
+        "render.view=\"steps\"",
+        "render.view=\"normals\"",
+        "render.shadows=\"aaltonen\"",
+        "render.shadows=\"improved\"",
+        "render.shadows=\"hard\"",
+    ];
+    for set in sets {
+        let over = [
+            "render.width=160".to_string(),
+            "render.height=90".to_string(),
+            set.to_string(),
+        ];
+        let scene = isoray_scene::load(&path, &over).unwrap_or_else(|e| panic!("{}", e.rendered));
+        let p = parity_of(&scene, &path, &mut gpu, None);
+        eprintln!("{set}: {p:?}");
+        if p.over > 0.01 || p.mean >= 1.0 || p.depth > 1e-3 {
+            failures.push(format!("{set}: {p:?}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

@@ -527,6 +527,8 @@ struct HitSet {
     nx: Vec<f32>,
     ny: Vec<f32>,
     nz: Vec<f32>,
+    /// The gradient's norm before normalising (the gradient view).
+    gnorm: Vec<f32>,
 }
 
 impl<'s> Worker<'s> {
@@ -615,8 +617,11 @@ impl<'s> Worker<'s> {
         };
         ev.gradients(&hs.px, &hs.py, &hs.pz, mode, &mut hs.nx, &mut hs.ny, &mut hs.nz);
         evals += m as u64 * gradient_cost(mode);
+        hs.gnorm.clear();
         for k in 0..m {
-            let n = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]).normalize_or_zero();
+            let g = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]);
+            hs.gnorm.push(g.length());
+            let n = g.normalize_or_zero();
             let i = hs.idx[k];
             let dir = Vec3::new(self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]);
             // Degenerate gradient: face the viewer. A normal facing away from
@@ -755,6 +760,30 @@ impl<'s> Worker<'s> {
             View::Normals => {
                 for (k, &i) in hs.idx.iter().enumerate() {
                     samples[i] = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]) * 0.5 + 0.5;
+                }
+            }
+            View::Mask => {
+                samples.iter_mut().for_each(|c| *c = Vec3::ZERO);
+                for &i in &hs.idx {
+                    samples[i] = Vec3::ONE;
+                }
+            }
+            View::Gradient => {
+                for (k, &i) in hs.idx.iter().enumerate() {
+                    samples[i] = heat(0.5 * hs.gnorm[k]);
+                }
+            }
+            View::Uv => {
+                let cam = &ctx.scene.camera;
+                let basis = cam.basis().map(|v| Vec3::from_array(v.map(|x| x as f32)));
+                let tan = cam.tan_half_fov() as f32;
+                let aspect = (s.width as f64 / s.height as f64) as f32;
+                // In 4·uv, pixel centres lie 8/h apart at quarter multiples of
+                // 4/h from the lines: a width of 2.9/h is never a tie.
+                let lines = 2.9 / s.height as f32;
+                for (i, c) in samples.iter_mut().enumerate() {
+                    let d = Vec3::new(self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]);
+                    *c = uv_colour(d, basis, tan, aspect, lines);
                 }
             }
             View::Shaded => *evals += self.trace_paths(ctx, hs, &mut samples),
@@ -1055,6 +1084,27 @@ fn gradient_cost(g: GradientMode) -> u64 {
         GradientMode::Central(_) => 6,
         GradientMode::Forward(_) | GradientMode::Tetrahedron(_) => 4,
         GradientMode::Dual => 1,
+    }
+}
+
+/// The uv view's colour of a camera ray `d`: uv = (d·right, d·up) /
+/// (d·fwd · tan(fov/2)) (the image plane: −1 … 1 vertically, ±aspect
+/// across) as red (u/aspect) and green (v), blue 0.25, darkened on a grid
+/// every 0.25 in uv, at the pixels whose centre is within `lines` of a line.
+pub fn uv_colour(d: Vec3, basis: [Vec3; 3], tan: f32, aspect: f32, lines: f32) -> Vec3 {
+    let [fwd, right, up] = basis;
+    let z = d.dot(fwd) * tan;
+    let (u, v) = (d.dot(right) / z, d.dot(up) / z);
+    let c = Vec3::new(
+        (0.5 + 0.5 * u / aspect).clamp(0.0, 1.0),
+        (0.5 + 0.5 * v).clamp(0.0, 1.0),
+        0.25,
+    );
+    let off = |x: f32| (4.0 * x - (4.0 * x).round()).abs();
+    if off(u) < lines || off(v) < lines {
+        c * 0.25
+    } else {
+        c
     }
 }
 

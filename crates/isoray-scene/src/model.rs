@@ -202,6 +202,14 @@ pub enum View {
     Steps,
     /// Debug: world-space normals mapped to colours.
     Normals,
+    /// Debug: the image-plane coordinates uv = (2x − w, h − 2y)/h as
+    /// colours, with a grid every 0.25 (no tracing).
+    Uv,
+    /// Debug: white where a ray hits, black where it misses.
+    Mask,
+    /// Debug: a heat map of the field's gradient norm at the hits (1, a
+    /// true distance, in the middle): how far a field is from a distance.
+    Gradient,
 }
 
 use crate::schema::{
@@ -233,6 +241,9 @@ impl Named for View {
         ("shaded", View::Shaded),
         ("steps", View::Steps),
         ("normals", View::Normals),
+        ("uv", View::Uv),
+        ("mask", View::Mask),
+        ("gradient", View::Gradient),
     ];
 }
 
