@@ -18,3 +18,22 @@ $I render examples/gallery.toml --width 320 --height 180 -q --set 'render.view="
 for v in mask gradient; do
   $I render examples/algebraic.toml --width 320 --height 180 -q --set "render.view=\"$v\"" -o "docs/img/view_$v.png"
 done
+# smooth_union_n (§6).
+cat > /tmp/isoray-smooth-union-n.toml <<'TOML'
+[camera]
+position = [0.0, 0.6, 4.0]
+target = [0.0, 0.3, 0.0]
+fov = 40.0
+[render]
+width = 320
+height = 180
+aa = 2
+[[light]]
+direction = [-1.0, 2.0, 1.5]
+[material.m]
+diffuse = [0.8, 0.45, 0.2]
+[[object]]
+material = "m"
+shape = "smooth_union_n(0.15, sphere(p - vec3(-0.5, 0.0, 0.0), 0.45), sphere(p - vec3(0.5, 0.0, 0.0), 0.45), sphere(p - vec3(0.0, 0.75, 0.0), 0.45))"
+TOML
+$I render /tmp/isoray-smooth-union-n.toml -o docs/img/smooth_union_n.png -q

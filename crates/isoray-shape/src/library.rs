@@ -118,6 +118,7 @@ pub const FUNCTIONS: &[Signature] = &[
     sig!("smooth_difference", ["a": F, "b": F, "k": F, "n": F], 1, Operator, "smooth_intersection(a, -b, k, n)."),
     sig!("smin_cubic", ["a": F, "b": F, "k": F], 0, Operator, "Cubic polynomial smooth minimum: min(a,b) - h^3 k/6, h = max(k-|a-b|,0)/k."),
     sig!("smin_exp", ["a": F, "b": F, "k": F], 0, Operator, "Exponential smooth minimum: -k ln(e^(-a/k) + e^(-b/k))."),
+    sig!("smooth_union_n", ["k": F, "a": F, "b": F], 0, Operator, "n-ary smooth union of two or more distances: -k ln(sum e^(-d_i/k)), the same in any order."),
     sig!("smin_pow", ["a": F, "b": F, "k": F], 0, Operator, "Power smooth minimum ((a^k b^k)/(a^k + b^k))^(1/k) for positive a, b; min(a,b) otherwise."),
     sig!("smin_root", ["a": F, "b": F, "k": F], 0, Operator, "Root smooth minimum: (a + b - sqrt((a-b)^2 + k^2)) / 2."),
     sig!("round", ["d": F, "r": F], 0, Operator, "d - r: grows a shape by r, rounding its edges."),
@@ -178,7 +179,7 @@ pub fn signature_text(s: &Signature) -> String {
             format!("{n}{opt}: {t}")
         })
         .collect();
-    let variadic = if matches!(s.name, "union" | "intersection") {
+    let variadic = if matches!(s.name, "union" | "intersection" | "smooth_union_n") {
         ", ..."
     } else {
         ""
@@ -198,6 +199,22 @@ pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Opt
                     .err(span, format!("`float` takes 1 argument, found {}", args.len()))
                     .with_label("wrong number of arguments")),
             })
+        }
+        "smooth_union_n" if args.len() >= 3 => {
+            let one = FUNCTIONS.iter().find(|s| s.name == name).expect("listed");
+            for a in args {
+                if a.v.ty != Type::Float {
+                    return Some(Err(l
+                        .err(
+                            a.span,
+                            format!("`{name}` takes numbers: expected `float`, found `{}`", a.v.ty),
+                        )
+                        .with_note(format!("signature: {}", signature_text(one)))));
+                }
+            }
+            let k = args[0].v.s();
+            let ds: Vec<Node> = args[1..].iter().map(|a| a.v.s()).collect();
+            return Some(Ok(Val::float(smooth_union_n(l.b, k, &ds))));
         }
         "union" | "intersection" if args.len() > 2 => {
             let one = FUNCTIONS.iter().find(|s| s.name == name).expect("listed");
@@ -854,6 +871,34 @@ fn smin_exp(b: &mut Builder, x: Node, y: Node, k: Node) -> Node {
     let one = b.constant(1.0);
     let s = b.add(one, e);
     let ln = b.unary(UnOp::Ln, s);
+    let corr = b.mul(k, ln);
+    b.sub(m, corr)
+}
+
+/// The n-ary exponential smooth minimum, m − k·ln Σ e^(−(dᵢ − m)/k) with
+/// m = min dᵢ (the same value as −k·ln Σ e^(−dᵢ/k), without overflow):
+/// symmetric in the dᵢ, unlike a fold of a two-argument smooth minimum.
+/// min(dᵢ) for a constant k ≤ 0.
+fn smooth_union_n(b: &mut Builder, k: Node, ds: &[Node]) -> Node {
+    let mut m = ds[0];
+    for &d in &ds[1..] {
+        m = b.min(m, d);
+    }
+    if b.const_value(k).is_some_and(|k| k <= 0.0) {
+        return m;
+    }
+    let mut sum = None;
+    for &d in ds {
+        let x = b.sub(d, m);
+        let t = b.div(x, k);
+        let nt = b.neg(t);
+        let e = b.unary(UnOp::Exp, nt);
+        sum = Some(match sum {
+            None => e,
+            Some(s) => b.add(s, e),
+        });
+    }
+    let ln = b.unary(UnOp::Ln, sum.expect("two or more distances"));
     let corr = b.mul(k, ln);
     b.sub(m, corr)
 }

@@ -206,6 +206,20 @@ fn smooth_operators_match_their_formulas() {
     check(&format!("smin_exp({a}, {b}, 0.1)"), |p| {
         -0.1 * ((-fa(p) / 0.1).exp() + (-fb(p) / 0.1).exp()).ln()
     });
+    // The n-ary smooth union: -k ln Σ e^(-dᵢ/k), the same in any order, and
+    // smin_exp for two distances.
+    let c = "box(p - vec3(0.0, 0.5, 0.0), vec3(0.3))";
+    let fc = |p: V| {
+        let q = [p[0].abs() - 0.3, (p[1] - 0.5).abs() - 0.3, p[2].abs() - 0.3];
+        let out = (q[0].max(0.0).powi(2) + q[1].max(0.0).powi(2) + q[2].max(0.0).powi(2)).sqrt();
+        out + q[0].max(q[1]).max(q[2]).min(0.0)
+    };
+    let n_ary = |p: V| -0.2 * ((-fa(p) / 0.2).exp() + (-fb(p) / 0.2).exp() + (-fc(p) / 0.2).exp()).ln();
+    check(&format!("smooth_union_n(0.2, {a}, {b}, {c})"), n_ary);
+    check(&format!("smooth_union_n(0.2, {c}, {a}, {b})"), n_ary);
+    check(&format!("smooth_union_n(0.1, {a}, {b})"), |p| {
+        -0.1 * ((-fa(p) / 0.1).exp() + (-fb(p) / 0.1).exp()).ln()
+    });
     check(&format!("smin_root({a}, {b}, 0.3)"), |p| {
         0.5 * (fa(p) + fb(p) - ((fa(p) - fb(p)).powi(2) + 0.09).sqrt())
     });
