@@ -37,3 +37,7 @@ material = "m"
 shape = "smooth_union_n(0.15, sphere(p - vec3(-0.5, 0.0, 0.0), 0.45), sphere(p - vec3(0.5, 0.0, 0.0), 0.45), sphere(p - vec3(0.0, 0.75, 0.0), 0.45))"
 TOML
 $I render /tmp/isoray-smooth-union-n.toml -o docs/img/smooth_union_n.png -q
+# Fixed-step raymarching (§9.1).
+for st in 0.05 0.3; do
+  $I render examples/gallery.toml --width 320 --height 180 -q --set 'render.march="fixed"' --set render.fixed_step=$st --set render.max_steps=2000 -o "docs/img/march_fixed_${st/./}.png"
+done

@@ -5,7 +5,7 @@
 use isoray_scene::analytic::Analytic;
 use isoray_scene::env::{EnvMap, RgbImage};
 use isoray_scene::{
-    AoTarget, AoWeights, LightKind, NormalMethod, Projection, Scene, ShadowMode, ShadowTarget, StepLimit, View,
+    AoTarget, AoWeights, LightKind, March, NormalMethod, Projection, Scene, ShadowMode, ShadowTarget, StepLimit, View,
 };
 use isoray_shade::MaterialSample;
 use isoray_shape::wgsl::{
@@ -13,7 +13,7 @@ use isoray_shape::wgsl::{
 };
 
 /// Words of `Settings` in `render.wgsl`.
-pub(crate) const SETTINGS_WORDS: usize = 68;
+pub(crate) const SETTINGS_WORDS: usize = 72;
 /// Words of one `Light`.
 const LIGHT_WORDS: usize = 20;
 /// Words of one `Mat`.
@@ -355,6 +355,7 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch) 
         .u((r.shadow_applies_to == ShadowTarget::All) as u32)
         .u((r.ao_weights == AoWeights::Uniform) as u32);
     out.u((r.ao_applies_to == AoTarget::All) as u32).d3(r.ambient);
+    out.u((r.march == March::Fixed) as u32).f(r.fixed_step as f32).u(0).u(0);
     debug_assert_eq!(out.0.len(), SETTINGS_WORDS);
     out
 }

@@ -24,6 +24,7 @@ struct Settings {
     any_analytic: u32, record: u32, stack_cap: u32, reg_slots: u32,
     step_limit_miss: u32, shadow_floor: f32, shadow_all: u32, ao_uniform: u32,
     ao_all: u32, amb_r: f32, amb_g: f32, amb_b: f32,
+    fixed_march: u32, fixed_step: f32, pad3: u32, pad4: u32,
 }
 
 struct Light {
@@ -270,7 +271,7 @@ fn sphere_trace(kind: u32, o: vec3<f32>, dir: vec3<f32>, cap: f32) -> Hit {
         if (cfg.relative_eps != 0u) { threshold = eps * t; }
         if (d < threshold) {
             // A bound never steps from outside to clearly inside.
-            if (last > 0.0 && d < -max(threshold, eps) * 4.0) {
+            if (cfg.fixed_march == 0u && last > 0.0 && d < -max(threshold, eps) * 4.0) {
                 n_overshoots += 1u;
                 worst_overshoot = max(worst_overshoot, (last * cfg.step_scale + (-d)) / last);
             }
@@ -278,7 +279,7 @@ fn sphere_trace(kind: u32, o: vec3<f32>, dir: vec3<f32>, cap: f32) -> Hit {
         }
         last = d;
         if (iso_is_nan(d)) { t = iso_inf(); break; }
-        t += d * cfg.step_scale;
+        if (cfg.fixed_march != 0u) { t += cfg.fixed_step; } else { t += d * cfg.step_scale; }
         if (t >= cap && cap <= tmax) {
             t = max(cap - 0.5 * eps, 0.0);
             break;

@@ -202,7 +202,8 @@ shape = "torus(rotate_x(p - vec3(0.9, 0.6, 0.0), 1.2), 0.5, 0.18)"
     assert!(p.over <= 0.01 && p.mean < 1.0 && p.depth <= 2e-3, "{p:?}");
 }
 
-/// The debug views and the shadow modes (settings: one pipeline for all)
+/// The debug views, the shadow modes and fixed-step marching (settings:
+/// one pipeline for all)
 /// draw on the GPU what they draw on the CPU.
 #[test]
 fn every_view_and_shadow_mode_renders_as_on_the_cpu() {
@@ -218,13 +219,11 @@ fn every_view_and_shadow_mode_renders_as_on_the_cpu() {
         "render.shadows=\"aaltonen\"",
         "render.shadows=\"improved\"",
         "render.shadows=\"hard\"",
+        "render.march=\"fixed\" render.fixed_step=0.05 render.max_steps=2000",
     ];
     for set in sets {
-        let over = [
-            "render.width=160".to_string(),
-            "render.height=90".to_string(),
-            set.to_string(),
-        ];
+        let mut over = vec!["render.width=160".to_string(), "render.height=90".to_string()];
+        over.extend(set.split_whitespace().map(String::from));
         let scene = isoray_scene::load(&path, &over).unwrap_or_else(|e| panic!("{}", e.rendered));
         let p = parity_of(&scene, &path, &mut gpu, None);
         eprintln!("{set}: {p:?}");

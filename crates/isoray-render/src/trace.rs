@@ -2,7 +2,7 @@
 //! evaluates the distance of all still-active rays with one batch call, so the
 //! shape tape runs over structure-of-arrays blocks (the hot path).
 
-use isoray_scene::{RenderSettings, ShadowMode, StepLimit};
+use isoray_scene::{March, RenderSettings, ShadowMode, StepLimit};
 use isoray_shape::{BatchEvaluator, GradientMode, Tape};
 
 /// A distance field ready to evaluate in a frame: a batch evaluator of its
@@ -169,6 +169,8 @@ pub fn sphere_trace_capped(
     let eps = s.hit_epsilon as f32;
     let tmax = s.max_distance as f32;
     let scale = s.step_scale as f32;
+    let fixed = s.march == March::Fixed;
+    let fixed_step = s.fixed_step as f32;
     let mut evals = 0u64;
     scratch.active.clear();
     scratch.active.extend(0..n as u32);
@@ -185,9 +187,10 @@ pub fn sphere_trace_capped(
             h.steps = step;
             let threshold = if s.relative_epsilon { eps * h.t } else { eps };
             if d < threshold {
-                // A bound never steps from outside to clearly inside.
+                // A bound never steps from outside to clearly inside (fixed
+                // steps do, by design).
                 let before = scratch.last[i as usize];
-                if before > 0.0 && d < -threshold.max(eps) * 4.0 {
+                if !fixed && before > 0.0 && d < -threshold.max(eps) * 4.0 {
                     scratch.overshoots += 1;
                     let factor = (before * scale + (-d)) / before;
                     scratch.worst_overshoot = scratch.worst_overshoot.max(factor);
@@ -199,7 +202,7 @@ pub fn sphere_trace_capped(
                 h.t = f32::INFINITY; // undefined field: treat as a miss
                 continue;
             }
-            h.t += d * scale;
+            h.t += if fixed { fixed_step } else { d * scale };
             let cap = caps.map_or(f32::INFINITY, |c| c[i as usize]);
             if h.t >= cap && cap <= tmax {
                 // The closed-form surface comes first; stop just outside it,

@@ -153,3 +153,40 @@ fn aaltonens_shadow_finds_the_closest_approach() {
         );
     }
 }
+
+/// Fixed-step raymarching (the Granada thesis's Algorithm 7): the hit is
+/// the first step whose distance is below the epsilon, so depths come in
+/// multiples of the step, and a slab thinner than a step is missed.
+#[test]
+fn fixed_steps_land_on_multiples_of_the_step_and_miss_thin_slabs() {
+    let text = r#"
+[camera]
+position = [0.0, 0.0, 1.0]
+target = [0.0, 0.0, 0.0]
+fov = 10.0
+[render]
+width = 3
+height = 3
+analytic = false
+max_distance = 50.0
+[[object]]
+shape = "SHAPE"
+"#;
+    let depth = |shape: &str, over: &[&str]| {
+        let ov: Vec<String> = over.iter().map(|s| s.to_string()).collect();
+        let scene = load_str(&text.replace("SHAPE", shape), "fixed.toml", &ov).unwrap_or_else(|e| panic!("{e}"));
+        let opts = RenderOptions {
+            aovs: true,
+            ..Default::default()
+        };
+        render(&scene, &opts).0.depth.unwrap()[4]
+    };
+    let plane = "plane(p, vec3(0.0, 0.0, 1.0), 0.0)";
+    let fixed = ["render.march=\"fixed\"", "render.fixed_step=0.3"];
+    assert!((depth(plane, &[]) - 1.0).abs() < 1e-3);
+    assert!((depth(plane, &fixed) - 1.2).abs() < 1e-5, "{}", depth(plane, &fixed));
+    // A slab 0.05 thick at distance 1.0 … 1.05: steps at 0.9 and 1.2 jump it.
+    let slab = "box(p + vec3(0.0, 0.0, 0.025), vec3(1.0, 1.0, 0.025))";
+    assert!((depth(slab, &[]) - 1.0).abs() < 1e-3);
+    assert!(depth(slab, &fixed).is_infinite());
+}

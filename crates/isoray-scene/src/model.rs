@@ -149,6 +149,20 @@ pub enum StepLimit {
     Miss,
 }
 
+/// How rays advance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum March {
+    /// Sphere tracing: each step advances the distance (times `step_scale`).
+    Sphere,
+    /// Fixed-step raymarching: each step advances `fixed_step`, whatever
+    /// the distance (a teaching mode: it misses features thinner than a step).
+    Fixed,
+}
+
+impl Named for March {
+    const NAMES: &'static [(&'static str, Self)] = &[("sphere", March::Sphere), ("fixed", March::Fixed)];
+}
+
 /// What a shadow factor multiplies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ShadowTarget {
@@ -306,6 +320,10 @@ settings! {
         max_depth: u32 = 5, int(0, 64), "bounces of reflected and refracted rays after the primary hit";
         /// Secondary rays whose weight (largest channel) falls below this stop.
         min_weight: f64 = 1e-3, num(WEIGHT), "a reflected or refracted ray whose weight (largest channel) is below this is not traced";
+        /// How primary and secondary rays advance.
+        march: March = March::Sphere, choice::<March>(), "how primary and secondary rays advance: `\"sphere\"` (sphere tracing, step d·`step_scale`) or `\"fixed\"` (fixed-step raymarching, step `fixed_step`; a hit where the distance first drops below `hit_epsilon`; a teaching mode that misses features thinner than a step; shadow rays' occluders and AO are found as before)";
+        /// The step of fixed-step raymarching.
+        fixed_step: f64 = 0.05, num(Range::POSITIVE), "with `march = \"fixed\"`: the length of every step";
         /// A ray out of steps inside the range: a hit or a miss.
         on_step_limit: StepLimit = StepLimit::Hit, choice::<StepLimit>(), "a primary or secondary ray that runs out of `max_steps` before `max_distance`: `\"hit\"` (it is grazing a surface) or `\"miss\"` (the background, as Unity-style raymarchers do)";
         /// Shadow factors never go below this: S' = floor + (1 − floor)·S.
