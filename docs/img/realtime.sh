@@ -41,3 +41,7 @@ $I render /tmp/isoray-smooth-union-n.toml -o docs/img/smooth_union_n.png -q
 for st in 0.05 0.3; do
   $I render examples/gallery.toml --width 320 --height 180 -q --set 'render.march="fixed"' --set render.fixed_step=$st --set render.max_steps=2000 -o "docs/img/march_fixed_${st/./}.png"
 done
+# Supersample patterns (§9.6).
+for pat in grid rotated jittered; do
+  $I render examples/csg.toml --width 160 --height 90 --aa 2 -q --set "render.aa_pattern=\"$pat\"" -o "docs/img/aa_$pat.png"
+done

@@ -5,7 +5,8 @@
 use isoray_scene::analytic::Analytic;
 use isoray_scene::env::{EnvMap, RgbImage};
 use isoray_scene::{
-    AoTarget, AoWeights, LightKind, March, NormalMethod, Projection, Scene, ShadowMode, ShadowTarget, StepLimit, View,
+    AaPattern, AoTarget, AoWeights, LightKind, March, NormalMethod, Projection, Scene, ShadowMode, ShadowTarget,
+    StepLimit, View,
 };
 use isoray_shade::MaterialSample;
 use isoray_shape::wgsl::{
@@ -355,7 +356,15 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch) 
         .u((r.shadow_applies_to == ShadowTarget::All) as u32)
         .u((r.ao_weights == AoWeights::Uniform) as u32);
     out.u((r.ao_applies_to == AoTarget::All) as u32).d3(r.ambient);
-    out.u((r.march == March::Fixed) as u32).f(r.fixed_step as f32).u(0).u(0);
+    let aa_pattern = match r.aa_pattern {
+        AaPattern::Grid => 0,
+        AaPattern::Rotated => 1,
+        AaPattern::Jittered => 2,
+    };
+    out.u((r.march == March::Fixed) as u32)
+        .f(r.fixed_step as f32)
+        .u(aa_pattern)
+        .u(0);
     debug_assert_eq!(out.0.len(), SETTINGS_WORDS);
     out
 }

@@ -24,7 +24,7 @@ struct Settings {
     any_analytic: u32, record: u32, stack_cap: u32, reg_slots: u32,
     step_limit_miss: u32, shadow_floor: f32, shadow_all: u32, ao_uniform: u32,
     ao_all: u32, amb_r: f32, amb_g: f32, amb_b: f32,
-    fixed_march: u32, fixed_step: f32, pad3: u32, pad4: u32,
+    fixed_march: u32, fixed_step: f32, aa_pattern: u32, pad4: u32,
 }
 
 struct Light {
@@ -1046,6 +1046,23 @@ fn add64(k: u32, v: u32) {
     if (old + v < old) { atomicAdd(&stats[2u * k + 1u], 1u); }
 }
 
+// isoray-render's sample_offset: where sample (sx, sy) of pixel (px, py)
+// lies in the pixel (grid, rotated grid, jittered).
+fn sample_offset(aa: u32, sx: u32, sy: u32, px: u32, py: u32) -> vec2<f32> {
+    let n = f32(aa);
+    if (cfg.aa_pattern == 1u) {
+        return vec2<f32>((f32(sx * aa + sy) + 0.5) / (n * n), (f32(sy * aa + aa - 1u - sx) + 0.5) / (n * n));
+    }
+    if (cfg.aa_pattern == 2u) {
+        let h1 = hash(hash(hash(px) ^ py) ^ (sy * aa + sx));
+        let h2 = hash(h1);
+        let u = f32(h1 >> 8u) / 16777216.0;
+        let v = f32(h2 >> 8u) / 16777216.0;
+        return vec2<f32>((f32(sx) + u) / n, (f32(sy) + v) / n);
+    }
+    return vec2<f32>((f32(sx) + 0.5) / n, (f32(sy) + 0.5) / n);
+}
+
 // Pixel (x, y): its colour, and with `cfg.aovs` the depth, normal and
 // albedo at the centre ray, written at `base` in `out`
 // (colour, depth, normal, albedo: 10 words, or 3 without AOVs).
@@ -1070,8 +1087,9 @@ fn render_pixel(x: u32, y: u32, base: u32) {
         var fx = f32(x) + 0.5;
         var fy = f32(y) + 0.5;
         if (sample) {
-            fx = f32(x) + (f32(sx) + 0.5) / f32(aa);
-            fy = f32(y) + (f32(sy) + 0.5) / f32(aa);
+            let off = sample_offset(aa, sx, sy, x, y);
+            fx = f32(x) + off.x;
+            fy = f32(y) + off.y;
         }
         let d = camera_dir(fx, fy);
         let index = (((y - ty) * tw + (x - tx)) * aa + sy) * aa + sx;

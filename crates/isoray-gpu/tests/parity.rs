@@ -202,7 +202,8 @@ shape = "torus(rotate_x(p - vec3(0.9, 0.6, 0.0), 1.2), 0.5, 0.18)"
     assert!(p.over <= 0.01 && p.mean < 1.0 && p.depth <= 2e-3, "{p:?}");
 }
 
-/// The debug views, the shadow modes and fixed-step marching (settings:
+/// The debug views, the shadow modes, fixed-step marching and the
+/// supersample patterns (settings:
 /// one pipeline for all)
 /// draw on the GPU what they draw on the CPU.
 #[test]
@@ -220,6 +221,8 @@ fn every_view_and_shadow_mode_renders_as_on_the_cpu() {
         "render.shadows=\"improved\"",
         "render.shadows=\"hard\"",
         "render.march=\"fixed\" render.fixed_step=0.05 render.max_steps=2000",
+        "render.aa=2 render.aa_pattern=\"rotated\"",
+        "render.aa=2 render.aa_pattern=\"jittered\"",
     ];
     for set in sets {
         let mut over = vec!["render.width=160".to_string(), "render.height=90".to_string()];

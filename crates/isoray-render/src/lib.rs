@@ -692,8 +692,9 @@ impl<'s> Worker<'s> {
             for i in 0..tw {
                 for sy in 0..aa {
                     for sx in 0..aa {
-                        let x = (x0 + i) as f64 + (sx as f64 + 0.5) / aa as f64;
-                        let y = (y0 + j) as f64 + (sy as f64 + 0.5) / aa as f64;
+                        let (ox, oy) = sample_offset(s.aa_pattern, aa, sx, sy, x0 + i, y0 + j);
+                        let x = (x0 + i) as f64 + ox;
+                        let y = (y0 + j) as f64 + oy;
                         self.rays.push(origin, ctx.cam.direction(x, y).as_vec3().to_array());
                     }
                 }
@@ -1084,6 +1085,27 @@ fn gradient_cost(g: GradientMode) -> u64 {
         GradientMode::Central(_) => 6,
         GradientMode::Forward(_) | GradientMode::Tetrahedron(_) => 4,
         GradientMode::Dual => 1,
+    }
+}
+
+/// Where sample (sx, sy) of the aa × aa samples of pixel (px, py) lies in
+/// the pixel, in [0, 1)² (the GPU's `sample_offset` is its twin).
+pub fn sample_offset(pattern: isoray_scene::AaPattern, aa: u32, sx: u32, sy: u32, px: u32, py: u32) -> (f64, f64) {
+    use isoray_scene::AaPattern;
+    let n = aa as f64;
+    match pattern {
+        AaPattern::Grid => ((sx as f64 + 0.5) / n, (sy as f64 + 0.5) / n),
+        AaPattern::Rotated => (
+            ((sx * aa + sy) as f64 + 0.5) / (n * n),
+            ((sy * aa + aa - 1 - sx) as f64 + 0.5) / (n * n),
+        ),
+        AaPattern::Jittered => {
+            use isoray_shade::lights::hash;
+            let h1 = hash(hash(hash(px) ^ py) ^ (sy * aa + sx));
+            let h2 = hash(h1);
+            let unit = |h: u32| (h >> 8) as f64 / (1u32 << 24) as f64;
+            ((sx as f64 + unit(h1)) / n, (sy as f64 + unit(h2)) / n)
+        }
     }
 }
 

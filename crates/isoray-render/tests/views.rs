@@ -57,3 +57,46 @@ fn the_uv_view_maps_the_image_plane() {
     let (u, v) = (-32.0f32 / 33.0, 32.0f32 / 33.0);
     close(img[0], [0.5 + 0.5 * u, 0.5 + 0.5 * v, 0.25]);
 }
+
+/// Supersample patterns: the rotated grid is RGSS for aa = 2 and gives
+/// every sample its own row and column (aa² levels on a horizontal or
+/// vertical edge, where the grid has aa); jittered samples stay in their
+/// grid cells, differ from pixel to pixel and are the same on every run.
+#[test]
+fn supersample_patterns() {
+    use isoray_render::sample_offset;
+    use isoray_scene::AaPattern::{Grid, Jittered, Rotated};
+    let pts = |pat, aa: u32, px: u32| -> Vec<(f64, f64)> {
+        (0..aa)
+            .flat_map(|sy| (0..aa).map(move |sx| (sx, sy)))
+            .map(|(sx, sy)| sample_offset(pat, aa, sx, sy, px, 7))
+            .collect()
+    };
+    let mut rgss = pts(Rotated, 2, 0);
+    rgss.sort_by(|a, b| a.0.total_cmp(&b.0));
+    assert_eq!(
+        rgss,
+        vec![(0.125, 0.375), (0.375, 0.875), (0.625, 0.125), (0.875, 0.625)]
+    );
+    for aa in 2..=5u32 {
+        let distinct = |v: Vec<f64>| {
+            let mut v = v;
+            v.sort_by(f64::total_cmp);
+            v.dedup();
+            v.len()
+        };
+        let r = pts(Rotated, aa, 0);
+        assert_eq!(distinct(r.iter().map(|p| p.0).collect()), (aa * aa) as usize);
+        assert_eq!(distinct(r.iter().map(|p| p.1).collect()), (aa * aa) as usize);
+        let g = pts(Grid, aa, 0);
+        assert_eq!(distinct(g.iter().map(|p| p.1).collect()), aa as usize);
+        let (j0, j1) = (pts(Jittered, aa, 0), pts(Jittered, aa, 1));
+        assert_ne!(j0, j1);
+        assert_eq!(j0, pts(Jittered, aa, 0));
+        for (k, &(x, y)) in j0.iter().enumerate() {
+            let (sx, sy) = ((k as u32 % aa) as f64, (k as u32 / aa) as f64);
+            let n = aa as f64;
+            assert!(x >= sx / n && x < (sx + 1.0) / n && y >= sy / n && y < (sy + 1.0) / n);
+        }
+    }
+}

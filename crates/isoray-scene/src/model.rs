@@ -149,6 +149,27 @@ pub enum StepLimit {
     Miss,
 }
 
+/// Where a pixel's aa × aa samples lie.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AaPattern {
+    /// A uniform grid: sample (i, j) at ((i + ½)/aa, (j + ½)/aa).
+    Grid,
+    /// A rotated grid (RGSS; angle atan ½ for aa = 2): every sample has its
+    /// own row and column, ((i·aa + j + ½)/aa², (j·aa + aa − 1 − i + ½)/aa²).
+    Rotated,
+    /// Jittered: one sample at a random place in each grid cell (a hash of
+    /// the pixel and the sample, the same on every run and backend).
+    Jittered,
+}
+
+impl Named for AaPattern {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("grid", AaPattern::Grid),
+        ("rotated", AaPattern::Rotated),
+        ("jittered", AaPattern::Jittered),
+    ];
+}
+
 /// How rays advance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum March {
@@ -275,6 +296,8 @@ settings! {
         height: u32 = 540, int(1, 16384), "image height in pixels (`--height` overrides)";
         /// Supersampling factor: aa×aa samples per pixel on a uniform grid.
         aa: u32 = 1, int(1, 16), "supersampling: aa × aa samples per pixel (`--aa` overrides)";
+        /// Where the supersamples lie in the pixel.
+        aa_pattern: AaPattern = AaPattern::Grid, choice::<AaPattern>(), "where the aa × aa samples lie in a pixel: `\"grid\"` (uniform), `\"rotated\"` (rotated grid: each sample its own row and column, better on near-horizontal edges) or `\"jittered\"` (one random point per grid cell, deterministic)";
         /// Maximum sphere-tracing steps per ray.
         max_steps: u32 = 256, int(1, 100_000), "sphere-tracing steps per primary ray";
         /// A ray hits when the distance falls below this.
