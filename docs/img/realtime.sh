@@ -45,3 +45,9 @@ done
 for pat in grid rotated jittered; do
   $I render examples/csg.toml --width 160 --height 90 --aa 2 -q --set "render.aa_pattern=\"$pat\"" -o "docs/img/aa_$pat.png"
 done
+# specular_fresnel (§9.3).
+F=""
+for m in floor plastic phong schlick lamp; do F="$F --set material.$m.specular_fresnel=true"; done
+$I render examples/lighting.toml --width 320 --height 180 -q -o docs/img/specular_fresnel_off.png
+# shellcheck disable=SC2086
+$I render examples/lighting.toml --width 320 --height 180 -q $F -o docs/img/specular_fresnel_on.png

@@ -416,7 +416,7 @@ pub(crate) fn materials(scene: &Scene) -> Words {
         out.v3(s.emission.to_array()).u(model);
         out.v3(s.reflectivity.to_array()).u(spec);
         out.v3(s.absorption.to_array()).u(fresnel);
-        out.u(other).f(size).u(0).u(0);
+        out.u(other).f(size).u(s.specular_fresnel as u32).u(0);
     }
     if scene.materials.is_empty() {
         out.0.resize(MAT_WORDS, 0);

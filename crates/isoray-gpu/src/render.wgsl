@@ -42,7 +42,7 @@ struct Mat {
     emission: vec3<f32>, model: u32,
     reflectivity: vec3<f32>, specular_function: u32,
     absorption: vec3<f32>, fresnel: u32,
-    checker_other: u32, checker_size: f32, pad0: u32, pad1: u32,
+    checker_other: u32, checker_size: f32, spec_fresnel: u32, pad1: u32,
 }
 
 struct Obj {
@@ -549,6 +549,7 @@ fn mix_mat(a: Mat, b: Mat, h: f32) -> Mat {
         m.model = b.model;
         m.specular_function = b.specular_function;
         m.fresnel = b.fresnel;
+        m.spec_fresnel = b.spec_fresnel;
     }
     return m;
 }
@@ -632,7 +633,14 @@ fn direct_light(s: Mat, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, local: vec3<f3
         c = dot3(n, normalize_or_zero(l + v));
     }
     let diffuse = s.diffuse * ndl;
-    let specular = s.specular * specular_factor(s.specular_function, c, s.shininess);
+    var specular = s.specular * specular_factor(s.specular_function, c, s.shininess);
+    if (s.spec_fresnel != 0u) {
+        // isoray-shade's specular_fresnel: 0.04 + 0.96·(1 − h·l)⁵.
+        let hv = normalize_or_zero(l + v);
+        let x = clamp(1.0 - max(dot3(hv, l), 0.0), 0.0, 1.0);
+        let x2 = x * x;
+        specular *= 0.04 + 0.96 * (x2 * x2 * x);
+    }
     return arriving * (local * diffuse + specular);
 }
 

@@ -223,6 +223,7 @@ fn every_view_and_shadow_mode_renders_as_on_the_cpu() {
         "render.march=\"fixed\" render.fixed_step=0.05 render.max_steps=2000",
         "render.aa=2 render.aa_pattern=\"rotated\"",
         "render.aa=2 render.aa_pattern=\"jittered\"",
+        "material.pearl.specular_fresnel=true material.gold.specular_fresnel=true material.teal.specular_fresnel=true",
     ];
     for set in sets {
         let mut over = vec!["render.width=160".to_string(), "render.height=90".to_string()];

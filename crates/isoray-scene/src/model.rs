@@ -555,6 +555,8 @@ settings! {
         ior: f64 = 1.5, num(IOR), "index of refraction (air is 1)";
         /// Beer–Lambert absorption per unit distance inside, per channel.
         absorption: Vec3 = [0.0; 3], colour(), "Beer–Lambert absorption per unit distance travelled inside";
+        /// Weight the highlight by Fresnel–Schlick, 0.04 + 0.96·(1 − h·l)⁵.
+        specular_fresnel: bool = false, boolean(), "weight the specular term by Fresnel–Schlick, F = 0.04 + 0.96·(1 − h·l)⁵ with h the half vector (the Granada thesis's Listing 3.3): highlights faint face-on, strong at grazing angles";
     }
     extra {
         /// Its name.

@@ -35,6 +35,8 @@ pub struct MaterialSample {
     pub absorption: Vec3,
     /// Fresnel weighting.
     pub fresnel: Fresnel,
+    /// Fresnel–Schlick weighting of the specular term.
+    pub specular_fresnel: bool,
 }
 
 impl From<&Material> for MaterialSample {
@@ -54,6 +56,7 @@ impl From<&Material> for MaterialSample {
             ior: m.ior as f32,
             absorption: to_vec3(m.absorption),
             fresnel: m.fresnel,
+            specular_fresnel: m.specular_fresnel,
         }
     }
 }
@@ -62,7 +65,7 @@ impl MaterialSample {
     /// Linear interpolation towards `other` by `h`: colours (vectors) by
     /// `Vec3::lerp`, x·(1 − h) + y·h per channel; shininess, transparency and
     /// ior as x + (y − x)·h; the shading model, specular function and
-    /// Fresnel weighting switch to `other`'s at h ≥ 0.5.
+    /// Fresnel weightings switch to `other`'s at h ≥ 0.5.
     pub fn mix(&self, other: &MaterialSample, h: f32) -> MaterialSample {
         MaterialSample {
             ambient: self.ambient.lerp(other.ambient, h),
@@ -81,6 +84,11 @@ impl MaterialSample {
             ior: self.ior + (other.ior - self.ior) * h,
             absorption: self.absorption.lerp(other.absorption, h),
             fresnel: if h < 0.5 { self.fresnel } else { other.fresnel },
+            specular_fresnel: if h < 0.5 {
+                self.specular_fresnel
+            } else {
+                other.specular_fresnel
+            },
         }
     }
 

@@ -55,10 +55,20 @@ pub fn direct_parts(s: &MaterialSample, n: Vec3, v: Vec3, l: Vec3) -> (Vec3, Vec
         }
         ShadingModel::BlinnPhong => n.dot((l + v).normalize_or_zero()),
     };
-    (
-        s.diffuse * ndl,
-        s.specular * specular_factor(s.specular_function, c, s.shininess),
-    )
+    let mut specular = s.specular * specular_factor(s.specular_function, c, s.shininess);
+    if s.specular_fresnel {
+        specular *= specular_fresnel(v, l);
+    }
+    (s.diffuse * ndl, specular)
+}
+
+/// The Granada thesis's Fresnel–Schlick weight of the highlight (Listing
+/// 3.3): 0.04 + 0.96·(1 − h·l)⁵ with h the half vector of `l` and `v`.
+pub fn specular_fresnel(v: Vec3, l: Vec3) -> f32 {
+    let h = (l + v).normalize_or_zero();
+    let x = (1.0 - h.dot(l).max(0.0)).clamp(0.0, 1.0);
+    let x2 = x * x;
+    0.04 + 0.96 * (x2 * x2 * x)
 }
 
 /// The light of one light (sample) reflected towards `v`:
@@ -98,7 +108,28 @@ mod tests {
             ior: 1.5,
             absorption: Vec3::ZERO,
             fresnel: Fresnel::Schlick,
+            specular_fresnel: false,
         }
+    }
+
+    /// The Granada thesis's Fresnel–Schlick weight: 0.04 face-on (h·l = 1),
+    /// 0.04 + 0.96/32 where h·l = ½ (l and v 120° apart), and it scales only
+    /// the specular part.
+    #[test]
+    fn specular_fresnel_weights_the_highlight() {
+        let n = Vec3::Z;
+        assert!((specular_fresnel(n, n) - 0.04).abs() < 1e-6);
+        let (l, v) = (
+            Vec3::new(0.75f32.sqrt(), 0.0, 0.5),
+            Vec3::new(-(0.75f32.sqrt()), 0.0, 0.5),
+        );
+        assert!((specular_fresnel(v, l) - (0.04 + 0.96 / 32.0)).abs() < 1e-6);
+        let mut s = surf(ShadingModel::BlinnPhong);
+        let (d0, s0) = direct_parts(&s, n, n, n);
+        s.specular_fresnel = true;
+        let (d1, s1) = direct_parts(&s, n, n, n);
+        assert_eq!(d0, d1);
+        assert!((s1 - s0 * 0.04).length() < 1e-6, "{s0} {s1}");
     }
 
     #[test]
