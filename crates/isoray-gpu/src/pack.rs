@@ -364,7 +364,7 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch) 
     out.u((r.march == March::Fixed) as u32)
         .f(r.fixed_step as f32)
         .u(aa_pattern)
-        .u(0);
+        .f(r.shadow_epsilon as f32);
     debug_assert_eq!(out.0.len(), SETTINGS_WORDS);
     out
 }

@@ -24,7 +24,7 @@ struct Settings {
     any_analytic: u32, record: u32, stack_cap: u32, reg_slots: u32,
     step_limit_miss: u32, shadow_floor: f32, shadow_all: u32, ao_uniform: u32,
     ao_all: u32, amb_r: f32, amb_g: f32, amb_b: f32,
-    fixed_march: u32, fixed_step: f32, aa_pattern: u32, pad4: u32,
+    fixed_march: u32, fixed_step: f32, aa_pattern: u32, shadow_eps: f32,
 }
 
 struct Light {
@@ -341,7 +341,8 @@ const SH_AALTONEN: u32 = 4u;
 fn shadow_march(kind: u32, o: vec3<f32>, l: vec3<f32>, tmax: f32, mode: u32, size: f32) -> f32 {
     var vis = 1.0;
     if (mode == SH_NONE) { return 1.0; }
-    let eps = cfg.hit_eps;
+    var eps = cfg.hit_eps;
+    if (cfg.shadow_eps > 0.0) { eps = cfg.shadow_eps; }
     let start = cfg.shadow_start;
     let min_step = max(0.5 * start, eps);
     var t = start;

@@ -243,7 +243,11 @@ pub fn shadow_march(
     if mode == ShadowMode::None || n == 0 {
         return 0;
     }
-    let eps = s.hit_epsilon as f32;
+    let eps = if s.shadow_epsilon > 0.0 {
+        s.shadow_epsilon
+    } else {
+        s.hit_epsilon
+    } as f32;
     let start = s.shadow_start as f32;
     let min_step = (0.5 * start).max(eps);
     let mut t = vec![start; n];

@@ -190,3 +190,22 @@ shape = "SHAPE"
     assert!((depth(slab, &[]) - 1.0).abs() < 1e-3);
     assert!(depth(slab, &fixed).is_infinite());
 }
+
+/// `shadow_epsilon` sets the occluder threshold of shadow rays: a ball the
+/// shadow ray passes 0.2 from lets the light through at the default
+/// threshold (`hit_epsilon`, 1e-4) and stops it at 0.3.
+#[test]
+fn the_shadow_epsilon_is_the_occluder_threshold() {
+    // The shadow ray from the origin along (1, 0, 1)/√2 passes 0.5 from the
+    // centre (1.5 + 0.5/√2, 0, 1.5 − 0.5/√2); radius 0.3 leaves 0.2.
+    let c = 0.5 * std::f32::consts::FRAC_1_SQRT_2;
+    let ball = format!("sphere(p - vec3({}, 0.0, {}), 0.3)", 1.5 + c, 1.5 - c);
+    let text = SCENE.replace("sphere(p - vec3(1.5, 0.0, 1.5), 0.5)", &ball);
+    let at = |over: &[&str]| {
+        let ov: Vec<String> = over.iter().map(|s| s.to_string()).collect();
+        let scene = load_str(&text, "eps.toml", &ov).unwrap_or_else(|e| panic!("{e}"));
+        render(&scene, &RenderOptions::default()).0.color[4 * 9 + 4]
+    };
+    close(at(&[]), 0.1 + 0.8 * COS45);
+    close(at(&["render.shadow_epsilon=0.3"]), 0.1);
+}

@@ -349,6 +349,8 @@ settings! {
         fixed_step: f64 = 0.05, num(Range::POSITIVE), "with `march = \"fixed\"`: the length of every step";
         /// A ray out of steps inside the range: a hit or a miss.
         on_step_limit: StepLimit = StepLimit::Hit, choice::<StepLimit>(), "a primary or secondary ray that runs out of `max_steps` before `max_distance`: `\"hit\"` (it is grazing a surface) or `\"miss\"` (the background, as Unity-style raymarchers do)";
+        /// The occluder threshold of shadow rays; 0 uses `hit_epsilon`.
+        shadow_epsilon: f64 = 0.0, num(Range::NON_NEGATIVE), "a shadow ray meets an occluder where the distance falls below this; 0 (the default) uses `hit_epsilon` (the Unity thesis: a fixed 0.001)";
         /// Shadow factors never go below this: S' = floor + (1 − floor)·S.
         shadow_floor: f64 = 0.0, num(WEIGHT), "the least a shadow lets through: S' = floor + (1 − floor)·S (the Unity thesis: 0.5)";
         /// What a light's shadow factor multiplies.
