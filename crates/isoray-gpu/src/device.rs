@@ -30,10 +30,8 @@ const STORAGE_BUFFERS: u32 = 10;
 
 /// A GPU device and its queue, with the adapter's description.
 pub struct Gpu {
-    /// The wgpu device (for callers that draw with it, such as a preview).
-    pub device: wgpu::Device,
-    /// Its queue.
-    pub queue: wgpu::Queue,
+    pub(crate) device: wgpu::Device,
+    pub(crate) queue: wgpu::Queue,
     info: wgpu::AdapterInfo,
 }
 

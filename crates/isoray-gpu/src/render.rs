@@ -153,21 +153,14 @@ impl GpuRenderer {
         }
         let start = Instant::now();
         let mut program = self.build(code)?;
-        self.warm_up(&program)?;
+        self.warm_up(&program.pipeline, &program.layout)?;
         program.tapes = tapes_of(scene);
         self.program = Some(program);
         Ok(Some(start.elapsed()))
     }
 
     fn build(&self, code: SceneCode) -> Result<Program, GpuError> {
-        let read = wgpu::BufferBindingType::Storage { read_only: true };
-        let write = wgpu::BufferBindingType::Storage { read_only: false };
-        let uniform = wgpu::BufferBindingType::Uniform;
-        // iso_in, settings, lights, materials, objects, environment, out,
-        // stats, programs, scratch.
-        let bindings = [read, uniform, read, read, read, read, write, write, read, write];
-        debug_assert_eq!(bindings.len(), BINDINGS);
-        let (pipeline, layout) = self.gpu.compute_pipeline(&code.source, "the scene", &bindings)?;
+        let (pipeline, layout) = self.tracer_pipeline(&code.source)?;
         Ok(Program {
             code,
             tapes: Vec::new(),
@@ -176,10 +169,34 @@ impl GpuRenderer {
         })
     }
 
-    /// Runs the new pipeline once on an empty region, so that a driver
+    /// The compute pipeline of a tracer module, with the tracer's bindings.
+    fn tracer_pipeline(&self, source: &str) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout), GpuError> {
+        let read = wgpu::BufferBindingType::Storage { read_only: true };
+        let write = wgpu::BufferBindingType::Storage { read_only: false };
+        let uniform = wgpu::BufferBindingType::Uniform;
+        // iso_in, settings, lights, materials, objects, environment, out,
+        // stats, programs, scratch.
+        let bindings = [read, uniform, read, read, read, read, write, write, read, write];
+        debug_assert_eq!(bindings.len(), BINDINGS);
+        self.gpu.compute_pipeline(source, "the scene", &bindings)
+    }
+
+    /// What a tracer module (a [`SceneCode::source`], possibly edited by
+    /// hand) costs the driver: the time to create its pipeline, and the
+    /// time until its first (empty) dispatch has run, which includes the
+    /// compile of drivers that compile then (lavapipe does).
+    pub fn time_module(&self, source: &str) -> Result<(Duration, Duration), GpuError> {
+        let start = Instant::now();
+        let (pipeline, layout) = self.tracer_pipeline(source)?;
+        let created = start.elapsed();
+        self.warm_up(&pipeline, &layout)?;
+        Ok((created, start.elapsed()))
+    }
+
+    /// Runs a new pipeline once on an empty region, so that a driver
     /// that compiles at the first dispatch (lavapipe does) compiles now and
     /// the build time reported is the whole cost of a structural edit.
-    fn warm_up(&self, program: &Program) -> Result<(), GpuError> {
+    fn warm_up(&self, pipeline: &wgpu::ComputePipeline, layout: &wgpu::BindGroupLayout) -> Result<(), GpuError> {
         let device = &self.gpu.device;
         let buffers: Vec<wgpu::Buffer> = (0..BINDINGS)
             .map(|i| {
@@ -196,11 +213,11 @@ impl GpuRenderer {
                 })
             })
             .collect();
-        let bind = self.bind_group(program, &buffers.iter().collect::<Vec<_>>());
+        let bind = self.bind_group(layout, &buffers.iter().collect::<Vec<_>>());
         let mut enc = device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&program.pipeline);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(1, 1, 1);
         }
@@ -208,7 +225,7 @@ impl GpuRenderer {
         self.gpu.wait(submission)
     }
 
-    fn bind_group(&self, program: &Program, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+    fn bind_group(&self, layout: &wgpu::BindGroupLayout, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
         let entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
             .enumerate()
@@ -219,7 +236,7 @@ impl GpuRenderer {
             .collect();
         self.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("tracer"),
-            layout: &program.layout,
+            layout,
             entries: &entries,
         })
     }
@@ -328,7 +345,7 @@ impl GpuRenderer {
                 &code_buf,
                 &scratch_buf,
             ];
-            let bind = self.bind_group(program, &buffers);
+            let bind = self.bind_group(&program.layout, &buffers);
             let query = timestamps.then(|| Queries::new(device));
             let mut enc = device.create_command_encoder(&Default::default());
             {

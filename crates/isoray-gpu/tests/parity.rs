@@ -71,10 +71,9 @@ fn parity_of(
     gpu: &mut GpuRenderer,
     kernel: Option<Kernel>,
 ) -> Parity {
-    let scene = scene.clone();
     let (width, height) = (scene.render.width, scene.render.height);
     let (cpu, _) = render(
-        &scene,
+        scene,
         &RenderOptions {
             aovs: true,
             ..Default::default()
@@ -82,7 +81,7 @@ fn parity_of(
     );
     let (gimg, _, timing) = gpu
         .render(
-            &scene,
+            scene,
             &GpuRenderOptions {
                 aovs: true,
                 kernel,

@@ -840,6 +840,7 @@ impl<'s> Worker<'s> {
         let floor = s.shadow_floor as f32;
         // With `shadow_applies_to = "all"`: each light's mean factor over its samples.
         let mut light_factor = vec![0.0f32; m];
+        let mut lit = Vec::new();
 
         let mut shadow_rays = Rays::default();
         let mut tmax = Vec::new();
@@ -936,7 +937,8 @@ impl<'s> Worker<'s> {
             if mode != ShadowMode::None {
                 self.counts.shadow += shadow_rays.len() as u64;
             }
-            let mut lit = vec![floor; if shadow_all { m } else { 0 }];
+            lit.clear();
+            lit.resize(if shadow_all { m } else { 0 }, floor);
             for (r, &k) in which.iter().enumerate() {
                 let i = hs.idx[k];
                 let v = -Vec3::new(self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]);

@@ -187,6 +187,18 @@ pub fn signature_text(s: &Signature) -> String {
     format!("{}({}{variadic})", s.name, ps.join(", "))
 }
 
+/// The arguments of the variadic built-in `name` are all floats, or the
+/// error at the first that is not: "`name` {what}: expected `float`, …".
+fn all_floats(l: &mut Lowerer, name: &str, args: &[Arg], what: &str) -> Result<(), Diagnostic> {
+    let one = FUNCTIONS.iter().find(|s| s.name == name).expect("listed");
+    match args.iter().find(|a| a.v.ty != Type::Float) {
+        None => Ok(()),
+        Some(a) => Err(l
+            .err(a.span, format!("`{name}` {what}: expected `float`, found `{}`", a.v.ty))
+            .with_note(format!("signature: {}", signature_text(one)))),
+    }
+}
+
 /// Lowers a call of a built-in; `None` when `name` is not one.
 pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Option<Result<Val, Diagnostic>> {
     match name {
@@ -201,32 +213,16 @@ pub(crate) fn call(l: &mut Lowerer, name: &str, span: Span, args: &[Arg]) -> Opt
             })
         }
         "smooth_union_n" if args.len() >= 3 => {
-            let one = FUNCTIONS.iter().find(|s| s.name == name).expect("listed");
-            for a in args {
-                if a.v.ty != Type::Float {
-                    return Some(Err(l
-                        .err(
-                            a.span,
-                            format!("`{name}` takes numbers: expected `float`, found `{}`", a.v.ty),
-                        )
-                        .with_note(format!("signature: {}", signature_text(one)))));
-                }
+            if let Err(e) = all_floats(l, name, args, "takes numbers") {
+                return Some(Err(e));
             }
             let k = args[0].v.s();
             let ds: Vec<Node> = args[1..].iter().map(|a| a.v.s()).collect();
             return Some(Ok(Val::float(smooth_union_n(l.b, k, &ds))));
         }
         "union" | "intersection" if args.len() > 2 => {
-            let one = FUNCTIONS.iter().find(|s| s.name == name).expect("listed");
-            for a in args {
-                if a.v.ty != Type::Float {
-                    return Some(Err(l
-                        .err(
-                            a.span,
-                            format!("`{name}` combines distances: expected `float`, found `{}`", a.v.ty),
-                        )
-                        .with_note(format!("signature: {}", signature_text(one)))));
-                }
+            if let Err(e) = all_floats(l, name, args, "combines distances") {
+                return Some(Err(e));
             }
             let mut acc = args[0].v.s();
             for a in &args[1..] {
