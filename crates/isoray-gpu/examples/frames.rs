@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! frames SCENE [--size WxH] [--frames N] [--warmup K] [--cpu N] [--latency]
-//!        [--label TEXT] [--set KEY=VALUE]...
+//!        [--label TEXT] [--kernel compiled|interpreted] [--set KEY=VALUE]...
 //! ```
 //!
 //! Prints one tab-separated line: label, size, the median GPU time of the
@@ -16,7 +16,7 @@
 
 use std::time::{Duration, Instant};
 
-use isoray_gpu::{GpuRenderOptions, GpuRenderer};
+use isoray_gpu::{GpuRenderOptions, GpuRenderer, Kernel};
 use isoray_scene::Scene;
 use isoray_shape::Value;
 
@@ -28,6 +28,7 @@ struct Args {
     cpu: usize,
     latency: bool,
     label: String,
+    kernel: Option<Kernel>,
     sets: Vec<String>,
 }
 
@@ -41,6 +42,7 @@ fn parse() -> Result<Args, String> {
         cpu: 0,
         latency: false,
         label: String::new(),
+        kernel: None,
         sets: Vec::new(),
     };
     let num = |v: Option<String>, what: &str| -> Result<usize, String> {
@@ -63,13 +65,20 @@ fn parse() -> Result<Args, String> {
             "--cpu" => a.cpu = num(it.next(), "--cpu")?,
             "--latency" => a.latency = true,
             "--label" => a.label = it.next().ok_or("--label needs text")?,
+            "--kernel" => {
+                a.kernel = Some(match it.next().as_deref() {
+                    Some("compiled") => Kernel::Compiled,
+                    Some("interpreted") => Kernel::Interpreted,
+                    _ => return Err("--kernel is compiled or interpreted".into()),
+                })
+            }
             "--set" => a.sets.push(it.next().ok_or("--set needs KEY=VALUE")?),
             s if a.scene.is_empty() && !s.starts_with('-') => a.scene = s.to_string(),
             s => return Err(format!("unexpected argument `{s}`")),
         }
     }
     if a.scene.is_empty() {
-        return Err("usage: frames SCENE [--size WxH] [--frames N] [--warmup K] [--cpu N] [--latency] [--label TEXT] [--set KEY=VALUE]...".into());
+        return Err("usage: frames SCENE [--size WxH] [--frames N] [--warmup K] [--cpu N] [--latency] [--label TEXT] [--kernel compiled|interpreted] [--set KEY=VALUE]...".into());
     }
     Ok(a)
 }
@@ -101,6 +110,7 @@ fn run() -> Result<(), String> {
     let mut gpu = GpuRenderer::new().map_err(|e| e.to_string())?;
     let opts = GpuRenderOptions {
         timing: true,
+        kernel: a.kernel,
         ..Default::default()
     };
     let frame = |gpu: &mut GpuRenderer, scene: &Scene| gpu.render(scene, &opts).map_err(|e| e.to_string());
@@ -131,10 +141,11 @@ fn run() -> Result<(), String> {
     let r = &scene.render;
     let fmt = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.3}"));
     println!(
-        "{}\t{}x{}\tgpu_ms={}\twall_ms={:.3}\tcpu_ms={}\tbuild_ms={build:.0}\tadapter={}",
+        "{}\t{}x{}\tkernel={}\tgpu_ms={}\twall_ms={:.3}\tcpu_ms={}\tbuild_ms={build:.0}\tadapter={}",
         if a.label.is_empty() { &a.scene } else { &a.label },
         r.width,
         r.height,
+        first.kernel.map_or("-", |k| k.name()),
         fmt((!gpu_ms.is_empty()).then(|| median(gpu_ms.clone()))),
         median(wall_ms),
         fmt(cpu),

@@ -109,6 +109,19 @@ impl Gpu {
         what: &str,
         bindings: &[wgpu::BufferBindingType],
     ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout), GpuError> {
+        let (mut pipelines, layout) = self.compute_pipelines(source, what, bindings, &["main"])?;
+        Ok((pipelines.remove(0), layout))
+    }
+
+    /// As [`Gpu::compute_pipeline`], one pipeline per entry point of the
+    /// module, all with the same bind group layout.
+    pub(crate) fn compute_pipelines(
+        &self,
+        source: &str,
+        what: &str,
+        bindings: &[wgpu::BufferBindingType],
+        entry_points: &[&str],
+    ) -> Result<(Vec<wgpu::ComputePipeline>, wgpu::BindGroupLayout), GpuError> {
         let device = &self.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -138,18 +151,23 @@ impl Gpu {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(what),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipelines = entry_points
+            .iter()
+            .map(|&entry| {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(what),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+            })
+            .collect();
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Gpu(format!("the shader of {what} did not compile: {e}")));
         }
-        Ok((pipeline, layout))
+        Ok((pipelines, layout))
     }
 
     /// Waits for `submission`, then reads the mapped-readable `buffer` as words.

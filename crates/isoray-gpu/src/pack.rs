@@ -51,10 +51,12 @@ impl Kernel {
 }
 
 impl Kernel {
-    /// The kernel the renderer uses by default: compiled. (The
-    /// interpreted kernel evaluates every example object correctly, but
-    /// inside the tracer on lavapipe it gives wrong pixels, not yet
-    /// understood: see docs/BENCHMARKS.md, "GPU renderer".)
+    /// The kernel the renderer uses by default: compiled. Its frames are
+    /// faster and its compile per structural edit is 2–14 s on lavapipe
+    /// (well under a second on a real GPU); the interpreted kernel needs
+    /// no compile per edit, but on lavapipe it draws the example scenes
+    /// with the largest tapes wrongly (see docs/BENCHMARKS.md, "GPU
+    /// renderer"), so it is chosen only by name.
     pub fn choose(_scene: &Scene) -> Kernel {
         Kernel::Compiled
     }
@@ -231,8 +233,10 @@ pub(crate) struct Band {
     pub(crate) height: u32,
 }
 
-/// The scratch each pixel's lane needs (binding 9, in vec4s of 16 bytes):
-/// its ray stack and its interpreter registers.
+/// The scratch each sample's lane needs (binding 9, in vec4s of 16 bytes):
+/// its ray stack and its interpreter registers, at least one vec4 (where
+/// the lane leaves its colour for the resolve pass); and the lanes per
+/// pixel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Scratch {
     /// Ray-stack entries (6 vec4s each): at most one waiting ray per
@@ -242,11 +246,13 @@ pub(crate) struct Scratch {
     /// Registers of the interpreting kernel (the most slots of any
     /// object's tape); none for the compiled kernel.
     pub(crate) reg_slots: u32,
+    /// Lanes per pixel: its aa × aa samples, and its centre ray with AOVs.
+    pub(crate) lanes: u32,
 }
 
 impl Scratch {
-    /// What the scene needs with `kernel`.
-    pub(crate) fn of(scene: &Scene, kernel: Kernel) -> Scratch {
+    /// What the scene needs with `kernel` (and the AOVs or not).
+    pub(crate) fn of(scene: &Scene, kernel: Kernel, aovs: bool) -> Scratch {
         let optical = scene.materials.iter().any(|m| {
             let s = MaterialSample::from(m);
             s.transparency > 0.0 || s.reflectivity.max_element() > 0.0
@@ -260,12 +266,22 @@ impl Scratch {
             Kernel::Compiled => 0,
             Kernel::Interpreted => scene.objects.iter().map(|o| o.shape.tape().slots()).max().unwrap_or(0) as u32,
         };
-        Scratch { stack_cap, reg_slots }
+        let lanes = scene.render.aa * scene.render.aa + aovs as u32;
+        Scratch {
+            stack_cap,
+            reg_slots,
+            lanes,
+        }
     }
 
-    /// Bytes per pixel.
+    /// Bytes per lane (as the shader's `lane_words`).
+    pub(crate) fn bytes_per_lane(self) -> u64 {
+        16 * (6 * self.stack_cap as u64 + self.reg_slots as u64).max(1)
+    }
+
+    /// Bytes per pixel (all its lanes).
     pub(crate) fn bytes_per_pixel(self) -> u64 {
-        16 * (6 * self.stack_cap as u64 + self.reg_slots as u64)
+        self.lanes as u64 * self.bytes_per_lane()
     }
 }
 

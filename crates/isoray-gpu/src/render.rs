@@ -23,8 +23,12 @@ use crate::{Gpu, GpuError};
 /// The tracer's bindings.
 const BINDINGS: usize = 10;
 
-/// Pixels per dispatch at most (bands of whole rows).
-const BAND_PIXELS: u32 = 1 << 18;
+/// Lanes (samples) per dispatch at most (bands of whole rows).
+const BAND_LANES: u64 = 1 << 18;
+
+/// Workgroups along one dimension of a dispatch at most (wgpu's default
+/// limit), so lanes per row at most 8 × this.
+const MAX_GROUPS: u32 = 65535;
 
 /// Bytes of lane scratch (ray stacks, interpreter registers) per dispatch
 /// at most: a scene with deep reflections or large interpreted tapes draws
@@ -35,16 +39,16 @@ const SCRATCH_BYTES: u64 = 64 << 20;
 /// need `scratch`.
 fn band_rows(width: u32, height: u32, scratch: Scratch) -> u32 {
     let by_scratch = SCRATCH_BYTES / scratch.bytes_per_pixel().max(1);
-    let pixels = (BAND_PIXELS as u64).min(by_scratch) as u32;
+    let pixels = (BAND_LANES / scratch.lanes.max(1) as u64).min(by_scratch) as u32;
     (pixels / width.max(1)).clamp(1, height.max(1))
 }
 
 /// How many bands (dispatches, progress steps) the scene's image takes
-/// with `kernel` (None: the renderer's choice).
-pub fn band_count(scene: &Scene, kernel: Option<Kernel>) -> usize {
+/// with `kernel` (None: the renderer's choice), with or without the AOVs.
+pub fn band_count(scene: &Scene, kernel: Option<Kernel>, aovs: bool) -> usize {
     let (w, h) = (scene.render.width, scene.render.height);
     let kernel = kernel.unwrap_or_else(|| Kernel::choose(scene));
-    h.div_ceil(band_rows(w, h, Scratch::of(scene, kernel))) as usize
+    h.div_ceil(band_rows(w, h, Scratch::of(scene, kernel, aovs))) as usize
 }
 
 /// What to compute besides the colour, and the job's control.
@@ -90,7 +94,10 @@ struct Program {
     /// The objects' tapes `code` was written from: a frame whose tapes are
     /// the same reuses everything without writing the module again.
     tapes: Vec<isoray_shape::Tape>,
+    /// The tracer: one lane per sample.
     pipeline: wgpu::ComputePipeline,
+    /// The samples' mean per pixel.
+    resolve: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
 }
 
@@ -153,24 +160,26 @@ impl GpuRenderer {
         }
         let start = Instant::now();
         let mut program = self.build(code)?;
-        self.warm_up(&program.pipeline, &program.layout)?;
+        self.warm_up(&[&program.pipeline, &program.resolve], &program.layout)?;
         program.tapes = tapes_of(scene);
         self.program = Some(program);
         Ok(Some(start.elapsed()))
     }
 
     fn build(&self, code: SceneCode) -> Result<Program, GpuError> {
-        let (pipeline, layout) = self.tracer_pipeline(&code.source)?;
+        let ([pipeline, resolve], layout) = self.tracer_pipelines(&code.source)?;
         Ok(Program {
             code,
             tapes: Vec::new(),
             pipeline,
+            resolve,
             layout,
         })
     }
 
-    /// The compute pipeline of a tracer module, with the tracer's bindings.
-    fn tracer_pipeline(&self, source: &str) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout), GpuError> {
+    /// The compute pipelines of a tracer module (the tracer, the resolve
+    /// pass), with the tracer's bindings.
+    fn tracer_pipelines(&self, source: &str) -> Result<([wgpu::ComputePipeline; 2], wgpu::BindGroupLayout), GpuError> {
         let read = wgpu::BufferBindingType::Storage { read_only: true };
         let write = wgpu::BufferBindingType::Storage { read_only: false };
         let uniform = wgpu::BufferBindingType::Uniform;
@@ -178,7 +187,11 @@ impl GpuRenderer {
         // stats, programs, scratch.
         let bindings = [read, uniform, read, read, read, read, write, write, read, write];
         debug_assert_eq!(bindings.len(), BINDINGS);
-        self.gpu.compute_pipeline(source, "the scene", &bindings)
+        let (pipelines, layout) = self
+            .gpu
+            .compute_pipelines(source, "the scene", &bindings, &["main", "resolve"])?;
+        let pipelines: [wgpu::ComputePipeline; 2] = pipelines.try_into().expect("two entry points");
+        Ok((pipelines, layout))
     }
 
     /// What a tracer module (a [`SceneCode::source`], possibly edited by
@@ -187,16 +200,16 @@ impl GpuRenderer {
     /// compile of drivers that compile then (lavapipe does).
     pub fn time_module(&self, source: &str) -> Result<(Duration, Duration), GpuError> {
         let start = Instant::now();
-        let (pipeline, layout) = self.tracer_pipeline(source)?;
+        let ([pipeline, resolve], layout) = self.tracer_pipelines(source)?;
         let created = start.elapsed();
-        self.warm_up(&pipeline, &layout)?;
+        self.warm_up(&[&pipeline, &resolve], &layout)?;
         Ok((created, start.elapsed()))
     }
 
     /// Runs a new pipeline once on an empty region, so that a driver
     /// that compiles at the first dispatch (lavapipe does) compiles now and
     /// the build time reported is the whole cost of a structural edit.
-    fn warm_up(&self, pipeline: &wgpu::ComputePipeline, layout: &wgpu::BindGroupLayout) -> Result<(), GpuError> {
+    fn warm_up(&self, pipelines: &[&wgpu::ComputePipeline], layout: &wgpu::BindGroupLayout) -> Result<(), GpuError> {
         let device = &self.gpu.device;
         let buffers: Vec<wgpu::Buffer> = (0..BINDINGS)
             .map(|i| {
@@ -217,9 +230,11 @@ impl GpuRenderer {
         let mut enc = device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
+            for pipeline in pipelines {
+                pass.set_pipeline(pipeline);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
         }
         let submission = self.gpu.queue.submit([enc.finish()]);
         self.gpu.wait(submission)
@@ -280,7 +295,16 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         });
         let timestamps = opts.timing && device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
-        let scratch = Scratch::of(scene, kernel);
+        let scratch = Scratch::of(scene, kernel, opts.aovs);
+        let row_lanes = w as u64 * scratch.lanes as u64;
+        if row_lanes.div_ceil(8) > MAX_GROUPS as u64 {
+            return Err(GpuError::Gpu(format!(
+                "{w} pixels × {} samples per row is more than the GPU renderer draws in one row \
+                 ({} lanes); lower render.aa or the width",
+                scratch.lanes,
+                8 * MAX_GROUPS as u64
+            )));
+        }
         let rows = band_rows(w, h, scratch);
         let scratch_buf = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scratch"),
@@ -359,7 +383,11 @@ impl GpuRenderer {
                 });
                 pass.set_pipeline(&program.pipeline);
                 pass.set_bind_group(0, &bind, &[]);
-                pass.dispatch_workgroups(band.width.div_ceil(8), band.height.div_ceil(8), 1);
+                pass.dispatch_workgroups((band.width * scratch.lanes).div_ceil(8), band.height.div_ceil(8), 1);
+                // The samples' mean per pixel (the pass sees the trace's
+                // writes: wgpu orders dispatches in a pass that share a buffer).
+                pass.set_pipeline(&program.resolve);
+                pass.dispatch_workgroups((band.width * band.height).div_ceil(64), 1, 1);
             }
             enc.copy_buffer_to_buffer(&out_buf, 0, &read_buf, 0, size);
             if let Some(q) = &query {

@@ -1072,10 +1072,26 @@ fn sample_offset(aa: u32, sx: u32, sy: u32, px: u32, py: u32) -> vec2<f32> {
     return vec2<f32>((f32(sx) + 0.5) / n, (f32(sy) + 0.5) / n);
 }
 
-// Pixel (x, y): its colour, and with `cfg.aovs` the depth, normal and
-// albedo at the centre ray, written at `base` in `out`
+// The lanes of one pixel: its aa × aa samples, then (with `cfg.aovs`)
+// its centre ray. One sample per lane, not a loop over the samples in one
+// lane: lavapipe draws wrong pixels when the interpreting kernel's tracer
+// sits inside such a loop (see docs/BENCHMARKS.md, "GPU renderer"), and
+// more, shorter lanes suit a GPU better.
+fn lanes_per_pixel() -> u32 {
+    var rays = cfg.aa * cfg.aa;
+    if (cfg.aovs != 0u) { rays += 1u; }
+    return rays;
+}
+
+// Words (vec4s) of lane scratch: the ray stack and the registers, at least
+// one, where a sample lane leaves its colour for `resolve`.
+fn lane_words() -> u32 { return max(1u, 6u * cfg.stack_cap + cfg.reg_slots); }
+
+// Sample k of pixel (x, y). A colour sample returns what it adds to the
+// pixel's sum (its colour, or its debug view); the centre ray (k = aa²,
+// with AOVs) writes the depth, normal and albedo at `base` in `out`
 // (colour, depth, normal, albedo: 10 words, or 3 without AOVs).
-fn render_pixel(x: u32, y: u32, base: u32) {
+fn render_sample(x: u32, y: u32, k: u32, base: u32) -> vec3<f32> {
     let origin = vec3<f32>(cfg.cam_x, cfg.cam_y, cfg.cam_z);
     let bg = vec3<f32>(cfg.bg_r, cfg.bg_g, cfg.bg_b);
     // Seeds as the CPU's tiles of 16 × 16 pixels number their samples.
@@ -1084,73 +1100,66 @@ fn render_pixel(x: u32, y: u32, base: u32) {
     let tw = min(16u, cfg.width - tx);
     let tile_seed = hash(hash(tx) ^ ty);
     let aa = cfg.aa;
-    var sum = vec3<f32>(0.0);
-    // The aa × aa samples, then (with AOVs) the centre ray: one call of
-    // trace_path for all (the GPU compiler inlines each call).
-    var rays = aa * aa;
-    if (cfg.aovs != 0u) { rays += 1u; }
-    for (var k = 0u; k < rays; k++) {
-        let sample = k < aa * aa;
-        let sx = k % aa;
-        let sy = k / aa;
-        var fx = f32(x) + 0.5;
-        var fy = f32(y) + 0.5;
-        if (sample) {
-            let off = sample_offset(aa, sx, sy, x, y);
-            fx = f32(x) + off.x;
-            fy = f32(y) + off.y;
-        }
-        let d = camera_dir(fx, fy);
-        let index = (((y - ty) * tw + (x - tx)) * aa + sy) * aa + sx;
-        let first = !sample || cfg.view != V_SHADED;
-        let r = trace_path(origin, d, hash(tile_seed ^ index), first);
-        if (!sample) {
-            put(base, 3u, r.t);
-            put(base, 4u, r.n.x);
-            put(base, 5u, r.n.y);
-            put(base, 6u, r.n.z);
-            put(base, 7u, r.albedo.x);
-            put(base, 8u, r.albedo.y);
-            put(base, 9u, r.albedo.z);
-        } else if (cfg.view == V_SHADED) {
-            sum += r.color;
-        } else if (cfg.view == V_STEPS) {
-            sum += heat(f32(r.steps) / f32(cfg.max_steps));
-        } else if (cfg.view == V_UV) {
-            sum += uv_colour(d);
-        } else if (cfg.view == V_MASK) {
-            if (abs(r.t) < iso_inf()) { sum += vec3<f32>(1.0); }
-        } else if (cfg.view == V_GRADIENT && abs(r.t) < iso_inf()) {
-            sum += heat(0.5 * r.gnorm);
-        } else if (cfg.view == V_NORMALS && abs(r.t) < iso_inf()) {
-            sum += r.n * 0.5 + 0.5;
-        } else {
-            sum += bg;
-        }
+    let sample = k < aa * aa;
+    let sx = k % aa;
+    let sy = k / aa;
+    var fx = f32(x) + 0.5;
+    var fy = f32(y) + 0.5;
+    if (sample) {
+        let off = sample_offset(aa, sx, sy, x, y);
+        fx = f32(x) + off.x;
+        fy = f32(y) + off.y;
     }
-    let color = sum * (1.0 / f32(aa * aa));
-    put(base, 0u, color.x);
-    put(base, 1u, color.y);
-    put(base, 2u, color.z);
+    let d = camera_dir(fx, fy);
+    let index = (((y - ty) * tw + (x - tx)) * aa + sy) * aa + sx;
+    let first = !sample || cfg.view != V_SHADED;
+    let r = trace_path(origin, d, hash(tile_seed ^ index), first);
+    if (!sample) {
+        put(base, 3u, r.t);
+        put(base, 4u, r.n.x);
+        put(base, 5u, r.n.y);
+        put(base, 6u, r.n.z);
+        put(base, 7u, r.albedo.x);
+        put(base, 8u, r.albedo.y);
+        put(base, 9u, r.albedo.z);
+        return vec3<f32>(0.0);
+    }
+    if (cfg.view == V_SHADED) { return r.color; }
+    if (cfg.view == V_STEPS) { return heat(f32(r.steps) / f32(cfg.max_steps)); }
+    if (cfg.view == V_UV) { return uv_colour(d); }
+    if (cfg.view == V_MASK) {
+        if (abs(r.t) < iso_inf()) { return vec3<f32>(1.0); }
+        return vec3<f32>(0.0);
+    }
+    if (cfg.view == V_GRADIENT && abs(r.t) < iso_inf()) { return heat(0.5 * r.gnorm); }
+    if (cfg.view == V_NORMALS && abs(r.t) < iso_inf()) { return r.n * 0.5 + 0.5; }
+    return bg;
 }
 
+// One lane per sample: lane x of a band row is sample x % lanes_per_pixel()
+// of pixel x / lanes_per_pixel(). A colour sample leaves its colour in its
+// scratch for `resolve`.
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     if (lane == 0u) {
         for (var k = 0u; k < 6u; k++) { atomicStore(&wg_stats[k], 0u); }
     }
     workgroupBarrier();
-    if (id.x < cfg.region_w && id.y < cfg.region_h) {
+    let rays = lanes_per_pixel();
+    if (id.x < cfg.region_w * rays && id.y < cfg.region_h) {
         n_evals = 0u;
         n_reflected = 0u;
         n_refracted = 0u;
         n_shadow = 0u;
         n_overshoots = 0u;
         worst_overshoot = 0.0;
-        let lane_index = id.y * cfg.region_w + id.x;
-        stack_base = lane_index * (6u * cfg.stack_cap + cfg.reg_slots);
+        let px = id.x / rays;
+        let k = id.x % rays;
+        let lane_index = id.y * cfg.region_w * rays + id.x;
+        stack_base = lane_index * lane_words();
         iso_reg_base = stack_base + 6u * cfg.stack_cap;
-        render_pixel(cfg.x0 + id.x, cfg.y0 + id.y, cfg.record * lane_index);
+        let c = render_sample(cfg.x0 + px, cfg.y0 + id.y, k, cfg.record * (id.y * cfg.region_w + px));
+        iso_regs[stack_base] = vec4<f32>(c, 0.0);
         atomicAdd(&wg_stats[0], n_evals);
         atomicAdd(&wg_stats[1], n_reflected);
         atomicAdd(&wg_stats[2], n_refracted);
@@ -1163,4 +1172,23 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_
         for (var k = 0u; k < 5u; k++) { add64(k, atomicLoad(&wg_stats[k])); }
         atomicMax(&stats[10], atomicLoad(&wg_stats[5]));
     }
+}
+
+// Each pixel's colour: the mean of its samples' colours, summed in sample
+// order as the CPU sums them.
+@compute @workgroup_size(64)
+fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
+    let pixel = id.x;
+    if (pixel >= cfg.region_w * cfg.region_h) { return; }
+    let rays = lanes_per_pixel();
+    let first = (pixel / cfg.region_w) * cfg.region_w * rays + (pixel % cfg.region_w) * rays;
+    var sum = vec3<f32>(0.0);
+    for (var k = 0u; k < cfg.aa * cfg.aa; k++) {
+        sum += iso_regs[(first + k) * lane_words()].xyz;
+    }
+    let color = sum * (1.0 / f32(cfg.aa * cfg.aa));
+    let base = cfg.record * pixel;
+    put(base, 0u, color.x);
+    put(base, 1u, color.y);
+    put(base, 2u, color.z);
 }

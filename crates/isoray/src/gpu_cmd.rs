@@ -33,7 +33,7 @@ pub(crate) fn render_gpu(scene: &Scene, aovs: bool, how: &HowToRender) -> Result
     let result = std::thread::scope(|sc| {
         let handle = sc.spawn(|| renderer.render(scene, &opts));
         if !quiet {
-            let total = isoray_gpu::band_count(scene, kernel);
+            let total = isoray_gpu::band_count(scene, kernel, aovs);
             crate::show_progress(&handle, &progress, total, start);
         }
         handle.join()

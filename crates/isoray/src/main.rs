@@ -41,7 +41,7 @@ enum Backend {
 /// How the GPU backend evaluates the objects' distances.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum GpuKernel {
-    /// The renderer's choice: compiled for small scenes, interpreted for large ones.
+    /// The renderer's choice (today the compiled kernel: see docs/BENCHMARKS.md).
     Auto,
     /// Each object's tape compiled into the shader: the fastest frames.
     Compiled,
