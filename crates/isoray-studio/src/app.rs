@@ -1,0 +1,627 @@
+//! The studio's window: a menu bar, the playground panel of controls bound
+//! to scene keys, and the live preview with an orbit camera.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use eframe::egui;
+use isoray_scene::schema::Named;
+use isoray_scene::Scene;
+use isoray_shape::Value;
+
+use crate::document::Document;
+use crate::orbit::Orbit;
+use crate::preview::{Frame, Preview};
+
+/// How the studio was started.
+#[derive(Debug, Clone, Default)]
+pub struct StudioOptions {
+    /// The scene file to open (None: a new scene).
+    pub scene: Option<PathBuf>,
+    /// Render the preview on the CPU even when there is a GPU.
+    pub cpu_only: bool,
+    /// Write a screenshot of the window here once the preview has
+    /// converged, then exit.
+    pub screenshot: Option<PathBuf>,
+}
+
+/// A file dialog in progress: the path typed so far.
+#[derive(Debug, Clone)]
+enum FileDialog {
+    Open(String),
+    SaveAs(String),
+}
+
+/// What to do once unsaved changes are dealt with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Pending {
+    Close,
+    New,
+}
+
+/// The application state.
+pub struct Studio {
+    doc: Document,
+    preview: Preview,
+    options: StudioOptions,
+    texture: Option<egui::TextureHandle>,
+    /// The last frame shown: its request and whether it was final.
+    shown: Option<(u64, bool, f64)>,
+    /// The request that answers the document as it is now.
+    wanted: u64,
+    /// The camera while the user drags it (committed on release).
+    orbit: Option<Orbit>,
+    /// A live value while a slider is dragged: (key, value) shown in the
+    /// preview and committed as one edit on release.
+    live: Option<(String, f64)>,
+    /// Status line: the last error or message.
+    status: String,
+    dialog: Option<FileDialog>,
+    confirm: Option<Pending>,
+    allow_close: bool,
+    screenshot_asked: bool,
+    started: Instant,
+    /// Preview size (pixels of the central panel, scaled).
+    preview_size: (u32, u32),
+    /// How long the last full-resolution frame took, ms.
+    full_frame_ms: f64,
+    /// Requests made while interacting (drawn at a reduced size).
+    reduced: std::collections::HashSet<u64>,
+}
+
+/// The frame time a drag aims at, ms.
+const INTERACTIVE_MS: f64 = 50.0;
+
+/// The linear scale of the preview while dragging, from the time of the
+/// last full frame (at one sample per pixel the time falls with the pixels).
+pub fn interactive_scale(full_frame_ms: f64) -> f64 {
+    if full_frame_ms <= INTERACTIVE_MS {
+        1.0
+    } else {
+        (INTERACTIVE_MS / full_frame_ms).sqrt().clamp(0.1, 1.0)
+    }
+}
+
+impl Studio {
+    /// Opens the scene of `options` (or a new one) and starts the preview.
+    pub fn new(ctx: &egui::Context, options: StudioOptions) -> Studio {
+        let mut status = String::new();
+        let doc = match &options.scene {
+            Some(p) => match Document::open(p) {
+                Ok(d) => d,
+                Err(e) => {
+                    status = format!("could not open {}: {}", p.display(), e.rendered);
+                    Document::new_scene()
+                }
+            },
+            None => Document::new_scene(),
+        };
+        let wake_ctx = ctx.clone();
+        let preview = Preview::start(options.cpu_only, move || wake_ctx.request_repaint());
+        Studio {
+            doc,
+            preview,
+            options,
+            texture: None,
+            shown: None,
+            wanted: 0,
+            orbit: None,
+            live: None,
+            status,
+            dialog: None,
+            confirm: None,
+            allow_close: false,
+            screenshot_asked: false,
+            started: Instant::now(),
+            preview_size: (0, 0),
+            full_frame_ms: 0.0,
+            reduced: Default::default(),
+        }
+    }
+
+    /// The document (for tests).
+    pub fn document(&self) -> &Document {
+        &self.doc
+    }
+
+    /// The scene the preview should show: the document's, with the drag in
+    /// progress (camera or slider) and the preview's size.
+    fn preview_scene(&self) -> Scene {
+        let mut scene = self.doc.scene().clone();
+        if let Some(o) = &self.orbit {
+            o.apply(&mut scene.camera);
+        }
+        if let Some((key, v)) = &self.live {
+            if let Some(name) = key.strip_prefix("params.") {
+                let _ = scene.set_param(name, Value::Float(*v));
+            }
+        }
+        let (w, h) = self.preview_size;
+        if w > 0 && h > 0 {
+            // While the user drags, frames must keep up: one sample per
+            // pixel, and fewer pixels when the last full frame was slow.
+            let scale = if self.interacting() {
+                let samples = (scene.render.aa * scene.render.aa) as f64;
+                scene.render.aa = 1;
+                interactive_scale(self.full_frame_ms / samples)
+            } else {
+                1.0
+            };
+            scene.render.width = ((w as f64 * scale).round() as u32).max(8);
+            scene.render.height = ((h as f64 * scale).round() as u32).max(8);
+        }
+        scene
+    }
+
+    /// True while a drag (camera or slider) is in progress.
+    fn interacting(&self) -> bool {
+        self.orbit.is_some() || self.live.is_some()
+    }
+
+    fn request_preview(&mut self) {
+        let scene = self.preview_scene();
+        self.wanted = self.preview.request(scene);
+        if self.interacting() {
+            self.reduced.insert(self.wanted);
+        }
+    }
+
+    /// Applies edits as one undo step; an error goes to the status line.
+    fn edit(&mut self, edits: Vec<String>) {
+        match self.doc.apply(&edits) {
+            Ok(()) => self.status.clear(),
+            Err(e) => self.status = e.rendered,
+        }
+        self.request_preview();
+    }
+
+    fn undo(&mut self) {
+        if self.doc.undo() {
+            self.request_preview();
+        }
+    }
+
+    fn redo(&mut self) {
+        if self.doc.redo() {
+            self.request_preview();
+        }
+    }
+
+    fn save(&mut self) {
+        if self.doc.path().is_none() {
+            self.dialog = Some(FileDialog::SaveAs("scene.toml".into()));
+            return;
+        }
+        match self.doc.save() {
+            Ok(p) => self.status = format!("saved {}", p.display()),
+            Err(e) => self.status = e.rendered,
+        }
+    }
+
+    fn title(&self) -> String {
+        let mark = if self.doc.is_modified() { "● " } else { "" };
+        format!("{mark}{} — isoray studio", self.doc.title())
+    }
+
+    fn menu_bar(&mut self, ui: &mut egui::Ui) {
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                if ui.button("New").clicked() {
+                    self.ask(Pending::New, ui.ctx());
+                }
+                if ui.button("Open…").clicked() {
+                    self.dialog = Some(FileDialog::Open(String::new()));
+                }
+                if ui.button("Save  (Ctrl+S)").clicked() {
+                    self.save();
+                }
+                if ui.button("Save as…").clicked() {
+                    let name = self.doc.path().map_or("scene.toml".into(), |p| p.display().to_string());
+                    self.dialog = Some(FileDialog::SaveAs(name));
+                }
+                ui.separator();
+                if ui.button("Quit").clicked() {
+                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.menu_button("Edit", |ui| {
+                if ui
+                    .add_enabled(self.doc.can_undo(), egui::Button::new("Undo  (Ctrl+Z)"))
+                    .clicked()
+                {
+                    self.undo();
+                }
+                if ui
+                    .add_enabled(self.doc.can_redo(), egui::Button::new("Redo  (Ctrl+Shift+Z)"))
+                    .clicked()
+                {
+                    self.redo();
+                }
+            });
+        });
+    }
+
+    /// Runs `what` now, or first asks about unsaved changes.
+    fn ask(&mut self, what: Pending, ctx: &egui::Context) {
+        if self.doc.is_modified() {
+            self.confirm = Some(what);
+        } else {
+            self.proceed(what, ctx);
+        }
+    }
+
+    fn proceed(&mut self, what: Pending, ctx: &egui::Context) {
+        match what {
+            Pending::Close => {
+                self.allow_close = true;
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+            Pending::New => {
+                self.doc = Document::new_scene();
+                self.request_preview();
+            }
+        }
+    }
+
+    /// The playground: parameters, render settings, lights and camera,
+    /// each control bound to the scene key it edits.
+    fn playground(&mut self, ui: &mut egui::Ui) {
+        let scene = self.doc.scene().clone();
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            egui::CollapsingHeader::new("Parameters")
+                .default_open(true)
+                .show(ui, |ui| self.parameters(ui, &scene));
+            egui::CollapsingHeader::new("Render")
+                .default_open(true)
+                .show(ui, |ui| self.render_settings(ui, &scene));
+            egui::CollapsingHeader::new("Lights")
+                .default_open(true)
+                .show(ui, |ui| self.lights(ui, &scene));
+            egui::CollapsingHeader::new("Camera")
+                .default_open(false)
+                .show(ui, |ui| {
+                    let c = &scene.camera;
+                    ui.label(format!("position {}", vec3(c.position)));
+                    ui.label(format!("target {}", vec3(c.target)));
+                    ui.label("Drag the preview to orbit, scroll to zoom.");
+                });
+        });
+    }
+
+    fn parameters(&mut self, ui: &mut egui::Ui, scene: &Scene) {
+        let params = scene.library.params().to_vec();
+        if params.is_empty() {
+            ui.label("The scene has no [params].");
+        }
+        for (name, value) in params {
+            let Value::Float(v) = value else {
+                ui.label(format!("{name} = {value:?} (vectors are edited in the file)"));
+                continue;
+            };
+            let key = format!("params.{name}");
+            let range = scene
+                .param_ranges
+                .iter()
+                .find(|r| r.key == key)
+                .map(|r| r.range)
+                .unwrap_or([v.min(0.0) - 1.0, v.max(0.0) + 1.0]);
+            self.slider(ui, &name, &key, v, range[0]..=range[1]);
+        }
+    }
+
+    /// A slider for `key`: the preview follows while dragging (no shader
+    /// rebuild), and release commits one edit.
+    fn slider(&mut self, ui: &mut egui::Ui, label: &str, key: &str, value: f64, range: std::ops::RangeInclusive<f64>) {
+        let mut v = match &self.live {
+            Some((k, x)) if k == key => *x,
+            _ => value,
+        };
+        let r = ui.add(egui::Slider::new(&mut v, range).text(label));
+        if r.changed() {
+            self.live = Some((key.to_string(), v));
+            self.request_preview();
+        }
+        if r.drag_stopped() || (r.changed() && !r.dragged()) {
+            self.live = None;
+            self.edit(vec![format!("{key}={v}")]);
+        }
+    }
+
+    fn render_settings(&mut self, ui: &mut egui::Ui, scene: &Scene) {
+        let r = &scene.render;
+        let mut shadows = r.shadows;
+        choice(ui, "Shadows", &mut shadows);
+        if shadows != r.shadows {
+            self.edit(vec![format!("render.shadows={}", name_of(shadows))]);
+        }
+        let mut ao = r.ao;
+        if ui.checkbox(&mut ao, "Ambient occlusion").changed() {
+            self.edit(vec![format!("render.ao={ao}")]);
+        }
+        let mut aa = r.aa;
+        if ui
+            .add(egui::Slider::new(&mut aa, 1..=4).text("Supersampling"))
+            .changed()
+        {
+            self.edit(vec![format!("render.aa={aa}")]);
+        }
+        let mut view = r.view;
+        choice(ui, "View", &mut view);
+        if view != r.view {
+            self.edit(vec![format!("render.view={}", name_of(view))]);
+        }
+    }
+
+    fn lights(&mut self, ui: &mut egui::Ui, scene: &Scene) {
+        if scene.lights.is_empty() {
+            ui.label("No lights.");
+        }
+        for (i, light) in scene.lights.iter().enumerate() {
+            ui.push_id(i, |ui| {
+                ui.label(format!("Light {i}"));
+                self.slider(
+                    ui,
+                    "intensity",
+                    &format!("light.{i}.intensity"),
+                    light.intensity,
+                    0.0..=4.0,
+                );
+                let c = light.color;
+                let mut rgb = [c[0] as f32, c[1] as f32, c[2] as f32];
+                if ui.color_edit_button_rgb(&mut rgb).changed() {
+                    self.edit(vec![format!("light.{i}.color=[{}, {}, {}]", rgb[0], rgb[1], rgb[2])]);
+                }
+            });
+        }
+    }
+
+    /// The preview: the latest frame, scaled to the panel; drag to orbit,
+    /// scroll to zoom.
+    fn preview_panel(&mut self, ui: &mut egui::Ui) {
+        let avail = ui.available_size();
+        let ppp = ui.ctx().pixels_per_point();
+        let size = ((avail.x * ppp).max(16.0) as u32, (avail.y * ppp).max(16.0) as u32);
+        if size != self.preview_size {
+            self.preview_size = size;
+            self.request_preview();
+        }
+        if let Some(f) = self.preview.take_frame() {
+            self.show(ui.ctx(), f);
+        }
+        let (rect, response) = ui.allocate_exact_size(avail, egui::Sense::drag());
+        if let Some(t) = &self.texture {
+            ui.painter().image(
+                t.id(),
+                rect,
+                egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+                egui::Color32::WHITE,
+            );
+        }
+        let scroll = if response.hovered() {
+            ui.input(|i| i.smooth_scroll_delta.y)
+        } else {
+            0.0
+        };
+        if response.dragged() || scroll != 0.0 {
+            let o = self.orbit.get_or_insert_with(|| Orbit::of(&self.doc.scene().camera));
+            let d = response.drag_delta();
+            o.rotate(-d.x as f64 * 0.01, d.y as f64 * 0.01);
+            o.zoom((-scroll as f64 * 0.002).exp());
+            self.request_preview();
+        }
+        if (response.drag_stopped() || (scroll != 0.0 && !response.dragged())) && self.orbit.is_some() {
+            let o = self.orbit.take().expect("orbiting");
+            let p = o.position();
+            self.edit(vec![format!("camera.position=[{}, {}, {}]", p[0], p[1], p[2])]);
+        }
+    }
+
+    fn show(&mut self, ctx: &egui::Context, f: Frame) {
+        let img = egui::ColorImage::from_rgba_unmultiplied([f.width as usize, f.height as usize], &f.rgba);
+        match &mut self.texture {
+            Some(t) => t.set(img, egui::TextureOptions::LINEAR),
+            None => self.texture = Some(ctx.load_texture("preview", img, egui::TextureOptions::LINEAR)),
+        }
+        if f.done && !self.reduced.remove(&f.id) {
+            self.full_frame_ms = f.ms;
+        }
+        self.shown = Some((f.id, f.done, f.ms));
+    }
+
+    fn status_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            if let Some(b) = self.preview.backend() {
+                ui.label(b.describe());
+            }
+            if let Some((id, done, ms)) = self.shown {
+                let state = if id != self.wanted || self.preview.busy() {
+                    "rendering…"
+                } else if done {
+                    "done"
+                } else {
+                    "refining…"
+                };
+                ui.label(format!("frame {ms:.0} ms, {state}"));
+            }
+            if let Some(e) = self.preview.error() {
+                ui.colored_label(egui::Color32::RED, e);
+            }
+            if !self.status.is_empty() {
+                ui.label(&self.status);
+            }
+        });
+    }
+
+    fn dialogs(&mut self, ctx: &egui::Context) {
+        if let Some(d) = self.dialog.clone() {
+            let (title, mut path) = match &d {
+                FileDialog::Open(p) => ("Open scene", p.clone()),
+                FileDialog::SaveAs(p) => ("Save scene as", p.clone()),
+            };
+            let mut close = false;
+            let mut go = false;
+            egui::Window::new(title).collapsible(false).show(ctx, |ui| {
+                ui.label("Path of the scene file:");
+                let r = ui.text_edit_singleline(&mut path);
+                if r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
+                    go = true;
+                }
+                ui.horizontal(|ui| {
+                    go |= ui.button("OK").clicked();
+                    close |= ui.button("Cancel").clicked();
+                });
+            });
+            self.dialog = Some(match d {
+                FileDialog::Open(_) => FileDialog::Open(path.clone()),
+                FileDialog::SaveAs(_) => FileDialog::SaveAs(path.clone()),
+            });
+            if go {
+                let p = PathBuf::from(&path);
+                match d {
+                    FileDialog::Open(_) => match Document::open(&p) {
+                        Ok(doc) => {
+                            self.doc = doc;
+                            self.status = format!("opened {}", p.display());
+                            self.request_preview();
+                            close = true;
+                        }
+                        Err(e) => self.status = e.rendered,
+                    },
+                    FileDialog::SaveAs(_) => match self.doc.save_as(&p) {
+                        Ok(p) => {
+                            self.status = format!("saved {}", p.display());
+                            close = true;
+                        }
+                        Err(e) => self.status = e.rendered,
+                    },
+                }
+            }
+            if close {
+                self.dialog = None;
+            }
+        }
+        if let Some(what) = self.confirm {
+            egui::Window::new("Unsaved changes").collapsible(false).show(ctx, |ui| {
+                ui.label(format!("{} has changes that are not saved.", self.doc.title()));
+                ui.horizontal(|ui| {
+                    if ui.button("Save").clicked() {
+                        self.save();
+                        self.confirm = None;
+                        if !self.doc.is_modified() {
+                            self.proceed(what, ctx);
+                        }
+                    }
+                    if ui.button("Discard").clicked() {
+                        self.confirm = None;
+                        self.proceed(what, ctx);
+                    }
+                    if ui.button("Cancel").clicked() {
+                        self.confirm = None;
+                    }
+                });
+            });
+        }
+    }
+
+    fn shortcuts(&mut self, ctx: &egui::Context) {
+        let (undo, redo, save) = ctx.input_mut(|i| {
+            let redo = i.consume_key(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z)
+                || i.consume_key(egui::Modifiers::COMMAND, egui::Key::Y);
+            let undo = i.consume_key(egui::Modifiers::COMMAND, egui::Key::Z);
+            let save = i.consume_key(egui::Modifiers::COMMAND, egui::Key::S);
+            (undo, redo, save)
+        });
+        if undo {
+            self.undo();
+        }
+        if redo {
+            self.redo();
+        }
+        if save {
+            self.save();
+        }
+    }
+
+    /// With `--screenshot`: once the preview shows the final frame of the
+    /// latest request, asks for a screenshot; writes it when it comes.
+    fn screenshot(&mut self, ctx: &egui::Context) {
+        let Some(out) = self.options.screenshot.clone() else {
+            return;
+        };
+        let converged = self.shown.is_some_and(|(id, done, _)| id == self.wanted && done) && !self.preview.busy();
+        let failed = self.preview.error().is_some() || self.started.elapsed().as_secs() > 600;
+        if (converged || failed) && !self.screenshot_asked {
+            self.screenshot_asked = true;
+            ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(Default::default()));
+        }
+        let shot = ctx.input(|i| {
+            i.events.iter().find_map(|e| match e {
+                egui::Event::Screenshot { image, .. } => Some(image.clone()),
+                _ => None,
+            })
+        });
+        if let Some(img) = shot {
+            match crate::write_screenshot(&out, &img) {
+                Ok(()) => eprintln!("screenshot: {}", out.display()),
+                Err(e) => eprintln!("error: could not write the screenshot {}: {e}", out.display()),
+            }
+            self.allow_close = true;
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        }
+    }
+}
+
+impl eframe::App for Studio {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        self.frame_ui(ui, &ctx);
+    }
+}
+
+impl Studio {
+    /// One pass of the whole window (the eframe app's `ui`, and tests).
+    pub fn frame_ui(&mut self, ui: &mut egui::Ui, ctx: &egui::Context) {
+        if self.wanted == 0 && self.preview_size != (0, 0) {
+            self.request_preview();
+        }
+        self.shortcuts(ctx);
+        if ctx.input(|i| i.viewport().close_requested()) && !self.allow_close && self.doc.is_modified() {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            self.confirm = Some(Pending::Close);
+        }
+        ctx.send_viewport_cmd(egui::ViewportCommand::Title(self.title()));
+        egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
+        egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
+        egui::Panel::right("playground")
+            .default_size(300.0)
+            .show(ui, |ui| self.playground(ui));
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ui, |ui| self.preview_panel(ui));
+        self.dialogs(ctx);
+        self.screenshot(ctx);
+        if self.preview.busy() {
+            ctx.request_repaint_after(std::time::Duration::from_millis(50));
+        }
+    }
+}
+
+/// A combo box over every value of a named choice.
+fn choice<T: Named + std::fmt::Debug>(ui: &mut egui::Ui, label: &str, value: &mut T) {
+    egui::ComboBox::from_label(label)
+        .selected_text(name_of(*value))
+        .show_ui(ui, |ui| {
+            for (name, v) in T::NAMES {
+                ui.selectable_value(value, *v, *name);
+            }
+        });
+}
+
+/// The file's name of a choice's value.
+fn name_of<T: Named>(value: T) -> &'static str {
+    T::NAMES.iter().find(|(_, v)| *v == value).map_or("?", |(n, _)| n)
+}
+
+fn vec3(v: [f64; 3]) -> String {
+    format!("[{:.3}, {:.3}, {:.3}]", v[0], v[1], v[2])
+}
