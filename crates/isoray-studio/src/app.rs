@@ -168,7 +168,13 @@ impl Studio {
 
     /// Applies edits as one undo step; an error goes to the status line.
     fn edit(&mut self, edits: Vec<String>) {
-        match self.doc.apply(&edits) {
+        let r = self.doc.apply(&edits);
+        self.done(r);
+    }
+
+    /// After a document edit: its error to the status line, a new preview.
+    fn done(&mut self, result: Result<(), isoray_scene::SceneError>) {
+        match result {
             Ok(()) => self.status.clear(),
             Err(e) => self.status = e.rendered,
         }
@@ -356,9 +362,22 @@ impl Studio {
         if scene.lights.is_empty() {
             ui.label("No lights.");
         }
+        if ui.button("Add light").clicked() {
+            let r = self.doc.push_table(
+                "light",
+                &[("kind", "\"directional\""), ("direction", "[-1.0, 2.0, 1.0]")],
+            );
+            self.done(r);
+        }
         for (i, light) in scene.lights.iter().enumerate() {
             ui.push_id(i, |ui| {
-                ui.label(format!("Light {i}"));
+                ui.horizontal(|ui| {
+                    ui.label(format!("Light {i}"));
+                    if ui.small_button("Remove").clicked() {
+                        let r = self.doc.remove_table("light", i);
+                        self.done(r);
+                    }
+                });
                 self.slider(
                     ui,
                     "intensity",

@@ -173,6 +173,59 @@ impl Document {
         Ok(())
     }
 
+    /// Appends an entry to the array of tables `array` (`light`,
+    /// `object`, …) with `entries` (key, value as TOML text), as one undo
+    /// step. The rest of the file, comments included, is untouched.
+    pub fn push_table(&mut self, array: &str, entries: &[(&str, &str)]) -> Result<(), SceneError> {
+        let mut doc = self.parsed()?;
+        let mut table = toml_edit::Table::new();
+        for (key, text) in entries {
+            let value: toml_edit::Value = text
+                .parse()
+                .map_err(|_| SceneError::usage(format!("`{array}.{key}`: `{text}` is not a TOML value")))?;
+            table.insert(key, toml_edit::Item::Value(value));
+        }
+        let root = doc.as_table_mut();
+        if !root.contains_key(array) {
+            root.insert(array, toml_edit::Item::ArrayOfTables(Default::default()));
+        }
+        let Some(list) = root.get_mut(array).and_then(|i| i.as_array_of_tables_mut()) else {
+            return Err(SceneError::usage(format!(
+                "`{array}` in the file is not an array of tables ([[{array}]])"
+            )));
+        };
+        list.push(table);
+        self.replace_text(doc.to_string())
+    }
+
+    /// Removes entry `index` of the array of tables `array`, as one undo step.
+    pub fn remove_table(&mut self, array: &str, index: usize) -> Result<(), SceneError> {
+        let mut doc = self.parsed()?;
+        let list = doc.get_mut(array).and_then(|i| i.as_array_of_tables_mut());
+        let n = list.as_ref().map_or(0, |l| l.len());
+        match list {
+            Some(l) if index < n => {
+                l.remove(index);
+                if l.is_empty() {
+                    doc.remove(array);
+                }
+            }
+            _ => {
+                return Err(SceneError::usage(format!(
+                    "the scene has {n} [[{array}]] entries: there is no `{array}.{index}`"
+                )))
+            }
+        }
+        self.replace_text(doc.to_string())
+    }
+
+    /// The text as a TOML document (it always parses: it loaded).
+    fn parsed(&self) -> Result<toml_edit::DocumentMut, SceneError> {
+        self.text.parse().map_err(|e: toml_edit::TomlError| {
+            SceneError::usage(format!("the scene is not valid TOML: {}", e.message()))
+        })
+    }
+
     /// True when there is an edit to undo.
     pub fn can_undo(&self) -> bool {
         !self.undo.is_empty()

@@ -126,3 +126,40 @@ fn an_orbit_keeps_the_camera_where_it_is_until_it_turns() {
     z.rotate(0.0, 10.0);
     assert!(z.pitch < std::f64::consts::FRAC_PI_2);
 }
+
+#[test]
+fn lights_are_added_and_removed_as_tables_of_the_file() {
+    let path = examples().join("showcase.toml");
+    let original = std::fs::read_to_string(&path).unwrap();
+    let mut doc = Document::open(&path).unwrap();
+    let n = doc.scene().lights.len();
+    doc.push_table(
+        "light",
+        &[
+            ("kind", "\"point\""),
+            ("position", "[1.0, 3.0, 2.0]"),
+            ("intensity", "0.5"),
+        ],
+    )
+    .unwrap();
+    assert_eq!(doc.scene().lights.len(), n + 1);
+    assert_eq!(doc.scene().lights[n].intensity, 0.5);
+    // Every line of the old text is still there, in order: the new table
+    // is inserted (after the other lights), nothing else changes.
+    let mut new_lines = doc.text().lines();
+    for line in original.lines() {
+        assert!(new_lines.any(|l| l == line), "lost `{line}`:\n{}", doc.text());
+    }
+    // A bad value is refused, naming the key, and changes nothing.
+    let before = doc.text().to_string();
+    let err = doc.push_table("light", &[("intensity", "lots")]).unwrap_err();
+    assert!(err.rendered.contains("light.intensity"), "{}", err.rendered);
+    assert_eq!(doc.text(), before);
+    doc.remove_table("light", n).unwrap();
+    assert_eq!(doc.scene().lights.len(), n);
+    assert!(doc.remove_table("light", 99).unwrap_err().rendered.contains("light.99"));
+    // Both edits undo to the original bytes.
+    doc.undo();
+    doc.undo();
+    assert_eq!(doc.text(), original);
+}
