@@ -66,11 +66,8 @@ fn parse() -> Result<Args, String> {
             "--latency" => a.latency = true,
             "--label" => a.label = it.next().ok_or("--label needs text")?,
             "--kernel" => {
-                a.kernel = Some(match it.next().as_deref() {
-                    Some("compiled") => Kernel::Compiled,
-                    Some("interpreted") => Kernel::Interpreted,
-                    _ => return Err("--kernel is compiled or interpreted".into()),
-                })
+                let name = it.next().unwrap_or_default();
+                a.kernel = Some(Kernel::from_name(&name).ok_or("--kernel is compiled or interpreted")?);
             }
             "--set" => a.sets.push(it.next().ok_or("--set needs KEY=VALUE")?),
             s if a.scene.is_empty() && !s.starts_with('-') => a.scene = s.to_string(),

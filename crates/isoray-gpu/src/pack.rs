@@ -41,6 +41,13 @@ pub enum Kernel {
 }
 
 impl Kernel {
+    /// The kernel named `compiled` or `interpreted` (None for any other name).
+    pub fn from_name(name: &str) -> Option<Kernel> {
+        [Kernel::Compiled, Kernel::Interpreted]
+            .into_iter()
+            .find(|k| k.name() == name)
+    }
+
     /// `compiled` or `interpreted`.
     pub fn name(self) -> &'static str {
         match self {

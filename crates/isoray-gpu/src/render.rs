@@ -26,10 +26,6 @@ const BINDINGS: usize = 10;
 /// Lanes (samples) per dispatch at most (bands of whole rows).
 const BAND_LANES: u64 = 1 << 18;
 
-/// Workgroups along one dimension of a dispatch at most (wgpu's default
-/// limit), so lanes per row at most 8 × this.
-const MAX_GROUPS: u32 = 65535;
-
 /// Bytes of lane scratch (ray stacks, interpreter registers) per dispatch
 /// at most: a scene with deep reflections or large interpreted tapes draws
 /// narrower bands.
@@ -296,13 +292,14 @@ impl GpuRenderer {
         });
         let timestamps = opts.timing && device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let scratch = Scratch::of(scene, kernel, opts.aovs);
-        let row_lanes = w as u64 * scratch.lanes as u64;
-        if row_lanes.div_ceil(8) > MAX_GROUPS as u64 {
+        // A row's lanes are one dispatch dimension, 8 lanes per workgroup.
+        let max_groups = device.limits().max_compute_workgroups_per_dimension as u64;
+        if (w as u64 * scratch.lanes as u64).div_ceil(8) > max_groups {
             return Err(GpuError::Gpu(format!(
                 "{w} pixels × {} samples per row is more than the GPU renderer draws in one row \
                  ({} lanes); lower render.aa or the width",
                 scratch.lanes,
-                8 * MAX_GROUPS as u64
+                8 * max_groups
             )));
         }
         let rows = band_rows(w, h, scratch);

@@ -52,11 +52,9 @@ struct Parity {
 /// The kernel to test: `ISORAY_GPU_KERNEL=compiled|interpreted`, or the
 /// renderer's choice.
 fn kernel() -> Option<Kernel> {
-    match std::env::var("ISORAY_GPU_KERNEL").as_deref() {
-        Ok("compiled") => Some(Kernel::Compiled),
-        Ok("interpreted") => Some(Kernel::Interpreted),
-        _ => None,
-    }
+    std::env::var("ISORAY_GPU_KERNEL")
+        .ok()
+        .and_then(|k| Kernel::from_name(&k))
 }
 
 fn parity(path: &std::path::Path, gpu: &mut GpuRenderer, width: u32, height: u32, kernel: Option<Kernel>) -> Parity {

@@ -520,7 +520,7 @@ pub fn interpreter(code: &str, inputs: &str) -> String {
             ),
         ));
     }
-    let skip = format!("write = false; if ({}.x > 0.0) {{ skip = b; }}", r("a"));
+    let skip = format!("write = false; if ({}.x > 0.0) {{ pc += 4u * b; }}", r("a"));
     value_cases.extend([
         (
             OP_SELECT,
@@ -543,16 +543,16 @@ pub fn interpreter(code: &str, inputs: &str) -> String {
     let dual_dispatch = dispatch_tree(&mut dual_cases, 2);
     // The loop head both interpreters share: fetch and decode one instruction.
     let fetch = format!(
-        "    var skip = 0u;
-    for (var i = 0u; i < len; i++) {{
-        let pc = start + 4u * i;
+        "    var pc = start;
+    let end = start + 4u * len;
+    while (pc < end) {{
         let w0 = {code}[pc];
-        let op = select(w0 & 0xffu, 255u, skip > 0u);
-        skip = select(0u, skip - 1u, skip > 0u);
+        let op = w0 & 0xffu;
         let o = w0 >> 8u;
         let a = {code}[pc + 1u];
         let b = {code}[pc + 2u];
         let c = {code}[pc + 3u];
+        pc += 4u;
 "
     );
     format!(

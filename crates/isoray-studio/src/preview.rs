@@ -80,7 +80,7 @@ pub struct Preview {
     tx: Sender<(u64, Scene)>,
     shared: Arc<Mutex<Shared>>,
     next_id: u64,
-    /// Called when a new frame is ready (egui's repaint request).
+    /// The worker thread (it ends when `tx` is dropped).
     _worker: std::thread::JoinHandle<()>,
 }
 
