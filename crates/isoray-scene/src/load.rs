@@ -107,6 +107,8 @@ const TOP_KEYS: &[&str] = &[
     "object",
     "params",
     "environment",
+    // isoray-studio's own table (the node graph's layout): never read here.
+    "studio",
 ];
 
 fn apply_override(src: &Sources, root: &mut Vec<Entry>, index: usize, text: &str) -> Result<()> {
@@ -298,6 +300,8 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     b.read_surfaces(top.get("surface"), &materials)?;
     let cache = options.objects.clone().unwrap_or_default();
     let mut objects = b.read_objects(top.get("object"), &materials, &cache)?;
+    // isoray-studio's layout: accepted and never read.
+    let _ = top.get("studio");
     top.finish(TOP_KEYS)?;
 
     let lib = b.lib;

@@ -627,9 +627,191 @@ impl Parser<'_> {
     }
 }
 
+/// Binding strength of an expression's outermost operator, as the parser
+/// reads it: sums bind loosest, then products, prefix minus, powers, and
+/// postfix swizzles, calls, names and numbers tightest.
+pub fn precedence(e: &Expr) -> u8 {
+    match &e.kind {
+        ExprKind::Binary(BinaryOp::Add | BinaryOp::Sub, ..) => 1,
+        ExprKind::Binary(BinaryOp::Mul | BinaryOp::Div, ..) => 2,
+        ExprKind::Neg(_) => 3,
+        ExprKind::Binary(BinaryOp::Pow, ..) => 4,
+        _ => 5,
+    }
+}
+
+/// A number as shape text: the shortest decimal that reads back as the
+/// same `f64`, with a `.0` on whole numbers (`1.0`, `0.25`, `1e-7`).
+pub fn number_text(v: f64) -> String {
+    let s = format!("{v:?}");
+    if s.contains(['.', 'e', 'E']) || !v.is_finite() {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+/// Writes `e` as shape text that parses back to the same expression
+/// (spans aside), with parentheses only where the grammar needs them.
+///
+/// ```
+/// use isoray_shape::syntax::{parse, print_expr};
+/// let p = parse("sphere((p - vec3(1, 0, 0)) * 2.0, 1) + -x^2", 0).unwrap();
+/// assert_eq!(print_expr(&p.body), "sphere((p - vec3(1.0, 0.0, 0.0)) * 2.0, 1.0) + -x ^ 2.0");
+/// ```
+pub fn print_expr(e: &Expr) -> String {
+    let mut out = String::new();
+    write_expr(&mut out, e, 0);
+    out
+}
+
+/// Writes `e` as [`print_expr`] does, in parentheses when it binds more
+/// loosely than `min` (a [`precedence`] level).
+pub fn print_expr_at(e: &Expr, min: u8) -> String {
+    let mut out = String::new();
+    write_expr(&mut out, e, min);
+    out
+}
+
+fn write_expr(out: &mut String, e: &Expr, min: u8) {
+    let prec = precedence(e);
+    let paren = prec < min;
+    if paren {
+        out.push('(');
+    }
+    match &e.kind {
+        ExprKind::Num(v) => out.push_str(&number_text(*v)),
+        ExprKind::Var(n) => out.push_str(n),
+        ExprKind::Call { name, args, .. } => {
+            out.push_str(name);
+            out.push('(');
+            for (i, a) in args.iter().enumerate() {
+                if i > 0 {
+                    out.push_str(", ");
+                }
+                write_expr(out, a, 0);
+            }
+            out.push(')');
+        }
+        ExprKind::Binary(op, a, b) => {
+            // Left-associative levels: the right operand must bind tighter.
+            // `^` is right-associative: its base is a postfix expression and
+            // its exponent a prefix one.
+            let (l, r) = match op {
+                BinaryOp::Add | BinaryOp::Sub => (1, 2),
+                BinaryOp::Mul | BinaryOp::Div => (2, 3),
+                BinaryOp::Pow => (5, 3),
+            };
+            write_expr(out, a, l);
+            out.push(' ');
+            out.push(op.symbol());
+            out.push(' ');
+            write_expr(out, b, r);
+        }
+        ExprKind::Neg(a) => {
+            out.push('-');
+            write_expr(out, a, 3);
+        }
+        ExprKind::Swizzle(a, s) => {
+            write_expr(out, a, 5);
+            out.push('.');
+            out.push_str(s);
+        }
+    }
+    if paren {
+        out.push(')');
+    }
+}
+
+impl Program {
+    /// The program as shape text ([`print_expr`] for each part), one
+    /// `let` per line; comments and layout are not kept.
+    pub fn to_text(&self) -> String {
+        let mut out = String::new();
+        for l in &self.lets {
+            out.push_str("let ");
+            out.push_str(&l.name);
+            if let Some((ty, _)) = l.ty {
+                out.push_str(match ty {
+                    TypeName::Float => ": float",
+                    TypeName::Vec2 => ": vec2",
+                    TypeName::Vec3 => ": vec3",
+                });
+            }
+            out.push_str(" = ");
+            write_expr(&mut out, &l.value, 0);
+            out.push_str(";\n");
+        }
+        write_expr(&mut out, &self.body, 0);
+        out
+    }
+}
+
+/// `e` with every span set to the empty span at 0, so that two parses of
+/// differently laid-out text compare equal when they mean the same.
+pub fn without_spans(e: &Expr) -> Expr {
+    let kind = match &e.kind {
+        ExprKind::Num(v) => ExprKind::Num(*v),
+        ExprKind::Var(n) => ExprKind::Var(n.clone()),
+        ExprKind::Call { name, args, .. } => ExprKind::Call {
+            name: name.clone(),
+            name_span: Span::default(),
+            args: args.iter().map(without_spans).collect(),
+        },
+        ExprKind::Binary(op, a, b) => ExprKind::Binary(*op, Box::new(without_spans(a)), Box::new(without_spans(b))),
+        ExprKind::Neg(a) => ExprKind::Neg(Box::new(without_spans(a))),
+        ExprKind::Swizzle(a, s) => ExprKind::Swizzle(Box::new(without_spans(a)), s.clone()),
+    };
+    Expr {
+        kind,
+        span: Span::default(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn printing_reads_back_to_the_same_expression() {
+        let cases = [
+            "1 - (2 - 3)",
+            "(1 - 2) - 3",
+            "a / (b * c)",
+            "-x ^ 2",
+            "(-x) ^ 2",
+            "x ^ y ^ z",
+            "(x ^ y) ^ z",
+            "x ^ -y",
+            "-(a + b) * c",
+            "a - -b",
+            "(p - vec3(1, 2, 3)).xz",
+            "-p.x",
+            "sphere(rotate_y(p - vec3(0.3, 0.45, -0.5), 0.6), 1e-7) * 2.5e10",
+            "min(a, b) + max(c, -d) / 3",
+        ];
+        for text in cases {
+            let e = parse(text, 0).unwrap().body;
+            let printed = print_expr(&e);
+            let again = parse(&printed, 0).unwrap().body;
+            assert_eq!(without_spans(&again), without_spans(&e), "{text} printed as {printed}");
+            assert_eq!(print_expr(&again), printed, "printing is stable for {text}");
+        }
+        assert_eq!(print_expr(&parse("(a - b) - c", 0).unwrap().body), "a - b - c");
+        assert_eq!(print_expr(&parse("a - (b - c)", 0).unwrap().body), "a - (b - c)");
+        assert_eq!(print_expr(&parse("(-x)^2", 0).unwrap().body), "(-x) ^ 2.0");
+        assert_eq!(number_text(0.95), "0.95");
+        assert_eq!(number_text(-2.0), "-2.0");
+    }
+
+    #[test]
+    fn programs_print_their_bindings() {
+        let p = parse("let s = 2.8; vec3 q = p * s;\nsphere(q, 1) / s", 0).unwrap();
+        let text = p.to_text();
+        assert_eq!(text, "let s = 2.8;\nlet q: vec3 = p * s;\nsphere(q, 1.0) / s");
+        let again = parse(&text, 0).unwrap();
+        assert_eq!(without_spans(&again.body), without_spans(&p.body));
+    }
 
     #[test]
     fn parses_precedence() {

@@ -10,6 +10,7 @@ use isoray_scene::Scene;
 use isoray_shape::Value;
 
 use crate::document::Document;
+use crate::graph::GraphEditor;
 use crate::orbit::Orbit;
 use crate::preview::{Frame, Preview};
 
@@ -67,6 +68,10 @@ pub struct Studio {
     full_frame_ms: f64,
     /// Requests made while interacting (drawn at a reduced size).
     reduced: std::collections::HashSet<u64>,
+    /// The node graph of the objects' shapes.
+    graph: GraphEditor,
+    /// Whether the graph panel is shown.
+    show_graph: bool,
 }
 
 /// The frame time a drag aims at, ms.
@@ -96,6 +101,7 @@ impl Studio {
             },
             None => Document::new_scene(),
         };
+        let graph = GraphEditor::of(&doc);
         let wake_ctx = ctx.clone();
         let preview = Preview::start(options.cpu_only, move || wake_ctx.request_repaint());
         Studio {
@@ -116,6 +122,8 @@ impl Studio {
             preview_size: (0, 0),
             full_frame_ms: 0.0,
             reduced: Default::default(),
+            graph,
+            show_graph: true,
         }
     }
 
@@ -229,6 +237,10 @@ impl Studio {
                 if ui.button("Quit").clicked() {
                     ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
                 }
+            });
+            ui.menu_button("View", |ui| {
+                ui.checkbox(&mut self.show_graph, "Graph");
+                ui.checkbox(&mut self.graph.thumbs.enabled, "Node thumbnails");
             });
             ui.menu_button("Edit", |ui| {
                 if ui
@@ -391,6 +403,68 @@ impl Studio {
                     self.edit(vec![format!("light.{i}.color=[{}, {}, {}]", rgb[0], rgb[1], rgb[2])]);
                 }
             });
+        }
+    }
+
+    /// The graph panel: a toolbar, then the node editor.
+    fn graph_panel(&mut self, ui: &mut egui::Ui) {
+        self.graph.sync(&self.doc);
+        ui.horizontal(|ui| {
+            ui.strong("Graph");
+            if ui
+                .button("Add object")
+                .on_hover_text("a new [[object]]: a sphere, with the scene's first material")
+                .clicked()
+            {
+                let material = self.doc.scene().materials.first().map(|m| format!("\"{}\"", m.name));
+                let mut entries = vec![("shape", "\"sphere(p, 0.5)\"")];
+                if let Some(m) = &material {
+                    entries.push(("material", m.as_str()));
+                }
+                let r = self.doc.push_table("object", &entries);
+                self.done(r);
+                self.graph.sync(&self.doc);
+            }
+            ui.label(
+                egui::RichText::new("right-click: add a node · drag pins: connect · + on an input: connect it")
+                    .weak()
+                    .small(),
+            );
+        });
+        let scene_text = self.doc.text().to_string();
+        let scene_name = self
+            .doc
+            .path()
+            .map_or("untitled.toml".to_string(), |p| p.display().to_string());
+        let crate::graph::GraphEditor {
+            snarl,
+            names,
+            errors,
+            search,
+            thumbs,
+            ..
+        } = &mut self.graph;
+        let mut viewer = crate::graph::view::Viewer {
+            names,
+            errors,
+            thumbs,
+            scene_text: &scene_text,
+            scene_name: &scene_name,
+            search,
+            changed: false,
+        };
+        let style = egui_snarl::ui::SnarlStyle {
+            collapsible: Some(true),
+            ..egui_snarl::ui::SnarlStyle::new()
+        };
+        egui_snarl::ui::SnarlWidget::new()
+            .id(egui::Id::new("isoray-graph"))
+            .style(style)
+            .show(snarl, &mut viewer, ui);
+        let released = ui.input(|i| i.pointer.any_released());
+        if viewer.changed || (released && self.graph.layout_changed()) {
+            let r = self.graph.commit(&mut self.doc).map(|_| ());
+            self.done(r);
         }
     }
 
@@ -611,6 +685,12 @@ impl Studio {
         ctx.send_viewport_cmd(egui::ViewportCommand::Title(self.title()));
         egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
         egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
+        if self.show_graph {
+            egui::Panel::left("graph")
+                .default_size(560.0)
+                .resizable(true)
+                .show(ui, |ui| self.graph_panel(ui));
+        }
         egui::Panel::right("playground")
             .default_size(300.0)
             .show(ui, |ui| self.playground(ui));

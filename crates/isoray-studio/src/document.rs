@@ -173,6 +173,26 @@ impl Document {
         Ok(())
     }
 
+    /// Applies `KEY=VALUE` edits and then a change to the file's TOML
+    /// itself (tables the scene keys do not reach, such as `[studio]`), as
+    /// one undo step. On an error nothing changes.
+    pub fn edit_with(
+        &mut self,
+        edits: &[String],
+        change: impl FnOnce(&mut toml_edit::DocumentMut),
+    ) -> Result<(), SceneError> {
+        let text = if edits.is_empty() {
+            self.text.clone()
+        } else {
+            isoray_scene::edit_text(&self.text, &self.name(), edits)?
+        };
+        let mut doc: toml_edit::DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| {
+            SceneError::usage(format!("the scene is not valid TOML: {}", e.message()))
+        })?;
+        change(&mut doc);
+        self.replace_text(doc.to_string())
+    }
+
     /// Appends an entry to the array of tables `array` (`light`,
     /// `object`, …) with `entries` (key, value as TOML text), as one undo
     /// step. The rest of the file, comments included, is untouched.
