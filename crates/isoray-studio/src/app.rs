@@ -132,6 +132,11 @@ impl Studio {
         &self.doc
     }
 
+    /// The graph panel's state (for tests).
+    pub fn graph(&self) -> &GraphEditor {
+        &self.graph
+    }
+
     /// The scene the preview should show: the document's, with the drag in
     /// progress (camera or slider) and the preview's size.
     fn preview_scene(&self) -> Scene {
@@ -413,10 +418,18 @@ impl Studio {
             ui.strong("Graph");
             if ui
                 .button("Add object")
-                .on_hover_text("a new [[object]]: a sphere, with the scene's first material")
+                .on_hover_text("a new [[object]]: a sphere, with the material of the last object")
                 .clicked()
             {
-                let material = self.doc.scene().materials.first().map(|m| format!("\"{}\"", m.name));
+                // The material of the last object, as a new object most
+                // often goes with the ones before it.
+                let scene = self.doc.scene();
+                let material = scene
+                    .objects
+                    .last()
+                    .and_then(|o| scene.materials.get(o.material))
+                    .filter(|m| m.name != "default")
+                    .map(|m| format!("\"{}\"", m.name));
                 let mut entries = vec![("shape", "\"sphere(p, 0.5)\"")];
                 if let Some(m) = &material {
                     entries.push(("material", m.as_str()));

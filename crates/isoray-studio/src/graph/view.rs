@@ -148,6 +148,7 @@ impl Viewer<'_> {
                 .hint_text("search nodes")
                 .desired_width(180.0),
         );
+        name_widget(&r, egui::WidgetType::TextEdit, "search nodes");
         r.request_focus();
         let found = matching(&entries, self.search);
         let mut picked = None;
@@ -188,7 +189,7 @@ impl Viewer<'_> {
         ui.menu_button("new node", |ui| {
             if let Some(node) = self.pick(ui) {
                 let pos = snarl.get_node_info(to.node).map_or(egui::Pos2::ZERO, |n| n.pos)
-                    - egui::vec2(model::LAYOUT_STEP.0, 0.0);
+                    + egui::vec2(-model::LAYOUT_STEP.0, 90.0 * to.input as f32);
                 let id = snarl.insert_node(pos, node);
                 self.attach(OutPinId { node: id, output: 0 }, to, snarl);
             }
@@ -253,24 +254,34 @@ pub fn compact(snarl: &mut Snarl<GraphNode>, node: NodeId, input: usize) {
     }
 }
 
+/// Names a widget for screen readers (and UI tests) apart from what it
+/// shows: the node's title and number, and the input.
+fn name_widget(r: &egui::Response, kind: egui::WidgetType, name: &str) {
+    r.widget_info(|| egui::WidgetInfo::labeled(kind, true, name));
+}
+
 /// Edits a slot's text in place; returns true when the edit is finished
-/// (a drag released, a field left), so it should be written back.
-pub fn slot_editor(ui: &mut Ui, text: &mut String) -> bool {
+/// (a drag released, a field left), so it should be written back. `name`
+/// is the accessible name of the widgets (`NAME`, or `NAME.x`… for a
+/// vector).
+pub fn slot_editor(ui: &mut Ui, text: &mut String, name: &str) -> bool {
     let trimmed = text.trim().to_string();
     if let Ok(mut v) = trimmed.parse::<f64>() {
         let r = ui.add(egui::DragValue::new(&mut v).speed(0.01).max_decimals(4));
+        name_widget(&r, egui::WidgetType::DragValue, name);
         if r.changed() {
             *text = number_text(v);
         }
-        return r.drag_stopped() || (r.lost_focus() && !r.dragged()) || (r.changed() && !r.dragged());
+        return r.drag_stopped() || (r.lost_focus() && !r.dragged()) || (r.changed() && !r.dragged() && !r.has_focus());
     }
     if let Some(mut vs) = numeric_vec(&trimmed) {
         let mut done = false;
         let mut changed = false;
-        for v in &mut vs {
+        for (v, c) in vs.iter_mut().zip(["x", "y", "z"]) {
             let r = ui.add(egui::DragValue::new(v).speed(0.01).max_decimals(4));
+            name_widget(&r, egui::WidgetType::DragValue, &format!("{name}.{c}"));
             changed |= r.changed();
-            done |= r.drag_stopped() || (r.changed() && !r.dragged()) || r.lost_focus();
+            done |= r.drag_stopped() || r.lost_focus() || (r.changed() && !r.dragged() && !r.has_focus());
         }
         if changed {
             let inner: Vec<String> = vs.iter().map(|v| number_text(*v)).collect();
@@ -279,6 +290,7 @@ pub fn slot_editor(ui: &mut Ui, text: &mut String) -> bool {
         return done;
     }
     let r = ui.add(egui::TextEdit::singleline(text).desired_width(120.0).hint_text("value"));
+    name_widget(&r, egui::WidgetType::TextEdit, name);
     r.lost_focus()
 }
 
@@ -353,6 +365,7 @@ impl SnarlViewer<GraphNode> for Viewer<'_> {
     ) -> impl egui_snarl::ui::SnarlPin + 'static {
         let id = pin.id;
         let connected = !pin.remotes.is_empty();
+        let title = snarl[id.node].title();
         let (label, editable, extra) = match &snarl[id.node] {
             GraphNode::Object { .. } => ("shape".to_string(), false, false),
             GraphNode::Op { form, slots } => {
@@ -367,23 +380,27 @@ impl SnarlViewer<GraphNode> for Viewer<'_> {
             }
             _ => (String::new(), false, false),
         };
-        ui.label(label);
+        ui.label(&label);
         let mut missing = !connected && !editable;
         if !connected && editable {
             let mut commit = false;
             if let GraphNode::Op { slots, .. } = &mut snarl[id.node] {
-                commit = slot_editor(ui, &mut slots[id.input]);
+                commit = slot_editor(ui, &mut slots[id.input], &format!("{title} #{} {label}", id.node.0));
                 missing = slots[id.input].trim().is_empty();
             }
             if commit {
                 self.changed = true;
             }
         }
-        ui.menu_button(if connected { "…" } else { "+" }, |ui| {
-            self.connect_menu(ui, id, snarl)
-        })
-        .response
-        .on_hover_text("connect this input to a new node or to one of the graph");
+        let r = ui
+            .button(if connected { "…" } else { "+" })
+            .on_hover_text("connect this input to a new node or to one of the graph");
+        name_widget(
+            &r,
+            egui::WidgetType::Button,
+            &format!("{title} #{} input {label}", id.node.0),
+        );
+        egui::Popup::menu(&r).show(|ui| self.connect_menu(ui, id, snarl));
         if extra {
             missing = false;
         }
