@@ -654,7 +654,9 @@ impl Studio {
         let Some(out) = self.options.screenshot.clone() else {
             return;
         };
-        let converged = self.shown.is_some_and(|(id, done, _)| id == self.wanted && done) && !self.preview.busy();
+        let converged = self.shown.is_some_and(|(id, done, _)| id == self.wanted && done)
+            && !self.preview.busy()
+            && (!self.show_graph || self.graph.thumbs.pending() == 0);
         let failed = self.preview.error().is_some() || self.started.elapsed().as_secs() > 600;
         if (converged || failed) && !self.screenshot_asked {
             self.screenshot_asked = true;

@@ -88,6 +88,12 @@ impl Thumbnails {
         Thumb::Pending
     }
 
+    /// How many thumbnails are still being rendered.
+    pub fn pending(&mut self) -> usize {
+        self.collect();
+        self.cache.values().filter(|t| matches!(t, Thumb::Pending)).count()
+    }
+
     /// Forgets every thumbnail (the scene's camera, lights or materials
     /// changed, so all of them are stale).
     pub fn clear(&mut self) {
