@@ -13,6 +13,7 @@ use crate::document::Document;
 use crate::graph::GraphEditor;
 use crate::orbit::Orbit;
 use crate::preview::{Frame, Preview};
+use crate::surfaces::{candidate, Check, Field, FieldError, Mode, Outcome, SurfaceForm};
 
 /// How the studio was started.
 #[derive(Debug, Clone, Default)]
@@ -72,6 +73,10 @@ pub struct Studio {
     graph: GraphEditor,
     /// Whether the graph panel is shown.
     show_graph: bool,
+    /// The right panel's tab: the playground (false) or the surfaces.
+    surfaces_tab: bool,
+    /// The surface dialog, when open: its fields and the check of them.
+    surface_dialog: Option<(SurfaceForm, Option<Check>)>,
 }
 
 /// The frame time a drag aims at, ms.
@@ -124,6 +129,8 @@ impl Studio {
             reduced: Default::default(),
             graph,
             show_graph: true,
+            surfaces_tab: false,
+            surface_dialog: None,
         }
     }
 
@@ -481,6 +488,193 @@ impl Studio {
         }
     }
 
+    /// The table of `[surface.*]` entries: name, type, parameters, input;
+    /// Edit, Delete and New.
+    fn surfaces_table(&mut self, ui: &mut egui::Ui) {
+        let rows = crate::surfaces::rows(self.doc.text());
+        if ui.button("New surface").clicked() {
+            self.surface_dialog = Some((SurfaceForm::new(&rows), None));
+        }
+        if rows.is_empty() {
+            ui.label("The scene has no [surface.NAME] tables.");
+        }
+        let mut delete = None;
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            egui::Grid::new("surfaces").striped(true).show(ui, |ui| {
+                for h in ["name", "type", "parameters", ""] {
+                    ui.strong(h);
+                }
+                ui.end_row();
+                for r in &rows {
+                    ui.label(&r.name).on_hover_text(&r.input);
+                    ui.label(match r.mode {
+                        Mode::Sdf => "SDF",
+                        Mode::Implicit => "implicit",
+                        Mode::Parametric => "parametric",
+                    });
+                    ui.label(r.params.join(", "));
+                    ui.horizontal(|ui| {
+                        if ui.small_button("Edit").clicked() {
+                            self.surface_dialog = Some((r.form.clone(), None));
+                        }
+                        if ui.small_button("Delete").clicked() {
+                            delete = Some(r.name.clone());
+                        }
+                    });
+                    ui.end_row();
+                }
+            });
+        });
+        if let Some(name) = delete {
+            let r = self.doc.edit_with(&[], |toml| {
+                if let Some(s) = toml.get_mut("surface").and_then(|s| s.as_table_mut()) {
+                    s.remove(&name);
+                }
+            });
+            self.done(r);
+        }
+    }
+
+    /// The surface dialog: each field with its error under it, checked on
+    /// a background thread as you type; Save when the surface is valid.
+    fn surface_window(&mut self, ctx: &egui::Context) {
+        let Some((mut form, mut check)) = self.surface_dialog.take() else {
+            return;
+        };
+        let mut open = true;
+        let mut save = None;
+        let prepared = candidate(self.doc.text(), &form);
+        // A new candidate: cancel the old check, start one on this text.
+        if let Ok(text) = &prepared {
+            if check.as_ref().is_none_or(|c| &c.text != text) {
+                if let Some(c) = &check {
+                    c.cancel();
+                }
+                let file = self
+                    .doc
+                    .path()
+                    .map_or("untitled.toml".to_string(), |p| p.display().to_string());
+                let wake = ctx.clone();
+                check = Some(Check::start(
+                    text.clone(),
+                    file,
+                    form.name.trim().to_string(),
+                    move || wake.request_repaint(),
+                ));
+            }
+        }
+        let (progress, outcome) = check.as_ref().map_or((0.0, None), |c| c.status());
+        let error: Option<FieldError> = match (&prepared, &outcome) {
+            (Err(e), _) => Some(e.clone()),
+            (Ok(_), Some(Outcome::Invalid(e))) => Some(e.clone()),
+            _ => None,
+        };
+        let at = |f: Field, ui: &mut egui::Ui| {
+            if let Some(e) = error.as_ref().filter(|e| e.field == f) {
+                ui.colored_label(egui::Color32::from_rgb(0xe0, 0x60, 0x50), &e.message);
+            }
+        };
+        let title = form
+            .original
+            .clone()
+            .map_or("New surface".to_string(), |n| format!("Surface {n}"));
+        egui::Window::new(title)
+            .open(&mut open)
+            .collapsible(false)
+            .show(ctx, |ui| {
+                ui.horizontal(|ui| {
+                    ui.label("name");
+                    ui.text_edit_singleline(&mut form.name);
+                });
+                at(Field::Name, ui);
+                ui.horizontal(|ui| {
+                    ui.selectable_value(&mut form.mode, Mode::Sdf, "SDF");
+                    ui.selectable_value(&mut form.mode, Mode::Implicit, "Implicit");
+                    ui.selectable_value(&mut form.mode, Mode::Parametric, "Parametric");
+                });
+                match form.mode {
+                    Mode::Sdf | Mode::Implicit => {
+                        ui.label(if form.mode == Mode::Sdf {
+                            "distance (shape text in p and the parameters)"
+                        } else {
+                            "equation f = 0 in x, y, z and the parameters"
+                        });
+                        ui.add(egui::TextEdit::multiline(&mut form.body).code_editor().desired_rows(3));
+                        at(Field::Body, ui);
+                    }
+                    Mode::Parametric => {
+                        for (i, c) in ["x", "y", "z"].iter().enumerate() {
+                            ui.horizontal(|ui| {
+                                ui.label(format!("{c}(s, t)"));
+                                ui.text_edit_singleline(&mut form.coords[i]);
+                            });
+                            at(Field::Coord(i), ui);
+                        }
+                    }
+                }
+                ui.horizontal(|ui| {
+                    ui.label("parameters");
+                    ui.text_edit_singleline(&mut form.params)
+                        .on_hover_text("{ r = 1.0, k = { default = 0.5, range = [0.0, 1.0] } }");
+                });
+                at(Field::Params, ui);
+                if form.mode != Mode::Sdf {
+                    egui::ComboBox::from_label("bound")
+                        .selected_text(if form.bound.is_empty() {
+                            "auto"
+                        } else {
+                            form.bound.as_str()
+                        })
+                        .show_ui(ui, |ui| {
+                            for b in ["", "taylor", "lipschitz", "first-order"] {
+                                ui.selectable_value(
+                                    &mut form.bound,
+                                    b.to_string(),
+                                    if b.is_empty() { "auto" } else { b },
+                                );
+                            }
+                        });
+                    at(Field::Bound, ui);
+                }
+                at(Field::Other, ui);
+                ui.separator();
+                match &outcome {
+                    None if prepared.is_ok() => {
+                        ui.horizontal(|ui| {
+                            ui.spinner();
+                            ui.add(egui::ProgressBar::new(progress as f32).desired_width(160.0));
+                            if ui.button("Cancel").clicked() {
+                                if let Some(c) = &check {
+                                    c.cancel();
+                                }
+                            }
+                        });
+                    }
+                    Some(Outcome::Valid(d)) => {
+                        ui.label(egui::RichText::new(d).monospace().small());
+                    }
+                    Some(Outcome::Cancelled) => {
+                        ui.label("check cancelled: edit a field to check again");
+                    }
+                    _ => {}
+                }
+                let valid = matches!(outcome, Some(Outcome::Valid(_))) && prepared.is_ok();
+                if ui.add_enabled(valid, egui::Button::new("Save")).clicked() {
+                    save = prepared.clone().ok();
+                }
+            });
+        if let Some(text) = save {
+            let r = self.doc.replace_text(text);
+            self.done(r);
+            return;
+        }
+        if open {
+            self.surface_dialog = Some((form, check));
+        } else if let Some(c) = &check {
+            c.cancel();
+        }
+    }
+
     /// The preview: the latest frame, scaled to the panel; drag to orbit,
     /// scroll to zoom.
     fn preview_panel(&mut self, ui: &mut egui::Ui) {
@@ -706,13 +900,23 @@ impl Studio {
                 .resizable(true)
                 .show(ui, |ui| self.graph_panel(ui));
         }
-        egui::Panel::right("playground")
-            .default_size(300.0)
-            .show(ui, |ui| self.playground(ui));
+        egui::Panel::right("playground").default_size(300.0).show(ui, |ui| {
+            ui.horizontal(|ui| {
+                ui.selectable_value(&mut self.surfaces_tab, false, "Playground");
+                ui.selectable_value(&mut self.surfaces_tab, true, "Surfaces");
+            });
+            ui.separator();
+            if self.surfaces_tab {
+                self.surfaces_table(ui);
+            } else {
+                self.playground(ui);
+            }
+        });
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| self.preview_panel(ui));
         self.dialogs(ctx);
+        self.surface_window(ctx);
         self.screenshot(ctx);
         if self.preview.busy() {
             ctx.request_repaint_after(std::time::Duration::from_millis(50));

@@ -15,6 +15,7 @@ pub mod document;
 pub mod graph;
 pub mod orbit;
 pub mod preview;
+pub mod surfaces;
 
 pub use app::{Studio, StudioOptions};
 pub use document::Document;

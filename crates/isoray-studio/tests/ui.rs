@@ -28,6 +28,17 @@ fn studio_sized(path: &std::path::Path, size: egui::Vec2) -> Harness<'static, St
     h
 }
 
+/// A copy of the example `name` in a temporary directory: the directory,
+/// the copy's path and its text.
+fn example_copy(name: &str) -> (tempfile::TempDir, std::path::PathBuf, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.toml");
+    let examples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    std::fs::copy(examples.join(name), &path).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    (dir, path, text)
+}
+
 /// The text `isoray set FILE KEY=VALUE…` would write.
 fn set(text: &str, edits: &[&str]) -> String {
     let edits: Vec<String> = edits.iter().map(|s| s.to_string()).collect();
@@ -36,11 +47,7 @@ fn set(text: &str, edits: &[&str]) -> String {
 
 #[test]
 fn the_playground_edits_the_keys_it_claims_and_undo_restores_the_bytes() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("scene.toml");
-    let examples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
-    std::fs::copy(examples.join("lighting.toml"), &path).unwrap();
-    let original = std::fs::read_to_string(&path).unwrap();
+    let (_dir, path, original) = example_copy("lighting.toml");
     let mut h = studio_on(&path);
 
     // A checkbox: render.ao.
@@ -235,4 +242,32 @@ fn a_scene_built_by_ui_actions_renders_as_the_reference_file() {
     // And the image is not empty: the union is in it.
     let background = a.color[0];
     assert!(a.color.iter().filter(|c| **c != background).count() > 500);
+}
+
+#[test]
+fn the_surfaces_tab_lists_the_scene_surfaces_and_opens_one_in_the_dialog() {
+    let (_dir, path, original) = example_copy("surfaces.toml");
+    let mut h = studio_sized(&path, egui::Vec2::new(1400.0, 900.0));
+    let rows = isoray_studio::surfaces::rows(&original);
+    let before: Vec<usize> = rows.iter().map(|r| h.query_all_by_label(&r.name).count()).collect();
+    h.get_by_label("Surfaces").click();
+    h.run_steps(2);
+    // Each surface has a row (a label more than the graph's nodes had).
+    for (r, n) in rows.iter().zip(before) {
+        assert_eq!(h.query_all_by_label(&r.name).count(), n + 1, "{}", r.name);
+    }
+    // One Edit per row, and the menu bar's.
+    assert_eq!(h.get_all_by_label("Edit").count(), rows.len() + 1);
+    h.get_all_by_label("Edit").nth(1).unwrap().click();
+    // The check runs in the background; the dialog's Save waits for it.
+    for _ in 0..200 {
+        h.run_steps(1);
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    h.get_by_label("Save").click();
+    h.run_steps(2);
+    // Save was enabled (the check passed) and closed the dialog ...
+    assert!(h.query_by_label("Save").is_none(), "the surface was valid and saved");
+    // ... and saving an unchanged surface changes nothing.
+    assert_eq!(h.state().document().text(), original);
 }
