@@ -152,8 +152,16 @@ impl Studio {
             o.apply(&mut scene.camera);
         }
         if let Some((key, v)) = &self.live {
-            if let Some(name) = key.strip_prefix("params.") {
-                let _ = scene.set_param(name, Value::Float(*v));
+            // A parameter is a runtime input; any other numeric key (a
+            // light's intensity or size, the camera's fov) is a value of
+            // the scene: neither rebuilds anything.
+            match key.strip_prefix("params.") {
+                Some(name) => {
+                    let _ = scene.set_param(name, Value::Float(*v));
+                }
+                None => {
+                    let _ = scene.set_value(key, &[*v]);
+                }
             }
         }
         let (w, h) = self.preview_size;
@@ -311,6 +319,7 @@ impl Studio {
                 .default_open(false)
                 .show(ui, |ui| {
                     let c = &scene.camera;
+                    self.slider(ui, "fov", "camera.fov", c.fov, 5.0..=120.0);
                     ui.label(format!("position {}", vec3(c.position)));
                     ui.label(format!("target {}", vec3(c.target)));
                     ui.label("Drag the preview to orbit, scroll to zoom.");
@@ -409,6 +418,7 @@ impl Studio {
                     light.intensity,
                     0.0..=4.0,
                 );
+                self.slider(ui, "size", &format!("light.{i}.size"), light.size, 0.01..=2.0);
                 let c = light.color;
                 let mut rgb = [c[0] as f32, c[1] as f32, c[2] as f32];
                 if ui.color_edit_button_rgb(&mut rgb).changed() {

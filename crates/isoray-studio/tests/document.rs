@@ -163,3 +163,26 @@ fn lights_are_added_and_removed_as_tables_of_the_file() {
     doc.undo();
     assert_eq!(doc.text(), original);
 }
+
+#[test]
+fn the_keys_the_playground_sliders_drag_are_values_set_without_reloading() {
+    // While a slider is dragged the preview shows the scene with the key
+    // set as a value (Scene::set_value): no reload, no shader rebuild.
+    let doc =
+        Document::open(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/showcase.toml")).unwrap();
+    let mut scene = doc.scene().clone();
+    for (key, v) in [("light.0.intensity", 0.5), ("light.0.size", 0.3), ("camera.fov", 55.0)] {
+        scene
+            .set_value(key, &[v])
+            .unwrap_or_else(|e| panic!("{key}: {}", e.rendered));
+    }
+    assert_eq!(scene.lights[0].intensity, 0.5);
+    assert_eq!(scene.lights[0].size, 0.3);
+    assert_eq!(scene.camera.fov, 55.0);
+    // On release the same keys are edits of the file.
+    let mut doc = doc;
+    doc.apply(&["light.0.size=0.3".to_string(), "camera.fov=55".to_string()])
+        .unwrap();
+    assert_eq!(doc.scene().lights[0].size, 0.3);
+    assert_eq!(doc.scene().camera.fov, 55.0);
+}
