@@ -56,6 +56,8 @@ pub struct Studio {
     /// A live value while a slider is dragged: (key, value) shown in the
     /// preview and committed as one edit on release.
     live: Option<(String, f64)>,
+    /// A live vector while a direction is dragged: (key, value).
+    live_vec: Option<(String, [f64; 3])>,
     /// Status line: the last error or message.
     status: String,
     dialog: Option<FileDialog>,
@@ -118,6 +120,7 @@ impl Studio {
             wanted: 0,
             orbit: None,
             live: None,
+            live_vec: None,
             status,
             dialog: None,
             confirm: None,
@@ -164,6 +167,9 @@ impl Studio {
                 }
             }
         }
+        if let Some((key, v)) = &self.live_vec {
+            let _ = scene.set_value(key, v);
+        }
         let (w, h) = self.preview_size;
         if w > 0 && h > 0 {
             // While the user drags, frames must keep up: one sample per
@@ -183,7 +189,7 @@ impl Studio {
 
     /// True while a drag (camera or slider) is in progress.
     fn interacting(&self) -> bool {
-        self.orbit.is_some() || self.live.is_some()
+        self.orbit.is_some() || self.live.is_some() || self.live_vec.is_some()
     }
 
     fn request_preview(&mut self) {
@@ -366,6 +372,60 @@ impl Studio {
         }
     }
 
+    /// A direction as azimuth and elevation sliders (the thesis's knobs),
+    /// shown live while dragged and written as `[x, y, z]` on release.
+    fn direction(&mut self, ui: &mut egui::Ui, key: &str, value: [f64; 3]) {
+        let d = match &self.live_vec {
+            Some((k, v)) if k == key => *v,
+            _ => value,
+        };
+        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-12);
+        let mut azimuth = d[2].atan2(d[0]).to_degrees();
+        let mut elevation = (d[1] / n).clamp(-1.0, 1.0).asin().to_degrees();
+        let a = ui.add(egui::Slider::new(&mut azimuth, -180.0..=180.0).text("azimuth °"));
+        let e = ui.add(egui::Slider::new(&mut elevation, -90.0..=90.0).text("elevation °"));
+        if a.changed() || e.changed() {
+            let (az, el) = (azimuth.to_radians(), elevation.to_radians());
+            let v = [el.cos() * az.cos(), el.sin(), el.cos() * az.sin()];
+            self.live_vec = Some((key.to_string(), v));
+            self.request_preview();
+        }
+        let released = |r: &egui::Response| r.drag_stopped() || (r.changed() && !r.dragged());
+        if released(&a) || released(&e) {
+            if let Some((_, v)) = self.live_vec.take() {
+                self.edit(vec![format!("{key}=[{}, {}, {}]", v[0], v[1], v[2])]);
+            }
+        }
+    }
+
+    /// A position as three drag values, shown live while dragged and
+    /// written on release.
+    fn position(&mut self, ui: &mut egui::Ui, key: &str, value: [f64; 3]) {
+        let mut v = match &self.live_vec {
+            Some((k, x)) if k == key => *x,
+            _ => value,
+        };
+        let mut changed = false;
+        let mut done = false;
+        ui.horizontal(|ui| {
+            ui.label("position");
+            for c in &mut v {
+                let r = ui.add(egui::DragValue::new(c).speed(0.05));
+                changed |= r.changed();
+                done |= r.drag_stopped() || r.lost_focus() || (r.changed() && !r.dragged() && !r.has_focus());
+            }
+        });
+        if changed {
+            self.live_vec = Some((key.to_string(), v));
+            self.request_preview();
+        }
+        if done {
+            if let Some((_, v)) = self.live_vec.take() {
+                self.edit(vec![format!("{key}=[{}, {}, {}]", v[0], v[1], v[2])]);
+            }
+        }
+    }
+
     fn render_settings(&mut self, ui: &mut egui::Ui, scene: &Scene) {
         let r = &scene.render;
         let mut shadows = r.shadows;
@@ -419,6 +479,15 @@ impl Studio {
                     0.0..=4.0,
                 );
                 self.slider(ui, "size", &format!("light.{i}.size"), light.size, 0.01..=2.0);
+                match light.kind {
+                    isoray_scene::LightKind::Directional { direction } => {
+                        self.direction(ui, &format!("light.{i}.direction"), direction);
+                    }
+                    isoray_scene::LightKind::Point { position } | isoray_scene::LightKind::Sphere { position, .. } => {
+                        self.position(ui, &format!("light.{i}.position"), position);
+                    }
+                    _ => {}
+                }
                 let c = light.color;
                 let mut rgb = [c[0] as f32, c[1] as f32, c[2] as f32];
                 if ui.color_edit_button_rgb(&mut rgb).changed() {
