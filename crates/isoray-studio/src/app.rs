@@ -449,6 +449,12 @@ impl Studio {
         if view != r.view {
             self.edit(vec![format!("render.view={}", name_of(view))]);
         }
+        let mut normals = r.normals;
+        choice(ui, "Normals", &mut normals);
+        if normals != r.normals {
+            self.edit(vec![format!("render.normals={}", name_of(normals))]);
+        }
+        self.slider(ui, "blend (smooth union k)", "render.blend", r.blend, 0.0..=1.0);
     }
 
     fn lights(&mut self, ui: &mut egui::Ui, scene: &Scene) {

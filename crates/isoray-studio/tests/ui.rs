@@ -65,6 +65,20 @@ fn the_playground_edits_the_keys_it_claims_and_undo_restores_the_bytes() {
     let after_shadows = set(&after_ao, &["render.shadows=hard"]);
     assert_eq!(h.state().document().text(), after_shadows);
 
+    // The normals method: render.normals (one more undo step, taken back
+    // at once).
+    h.get_by_label("Normals").click();
+    h.run_steps(2);
+    h.get_by_label("analytic").click();
+    h.run_steps(2);
+    assert_eq!(
+        h.state().document().text(),
+        set(&after_shadows, &["render.normals=analytic"])
+    );
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().document().text(), after_shadows);
+
     // Undo twice: the original bytes; redo once: the first edit's.
     h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
     h.run_steps(2);
