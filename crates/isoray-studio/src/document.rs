@@ -186,9 +186,7 @@ impl Document {
         } else {
             isoray_scene::edit_text(&self.text, &self.name(), edits)?
         };
-        let mut doc: toml_edit::DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| {
-            SceneError::usage(format!("the scene is not valid TOML: {}", e.message()))
-        })?;
+        let mut doc = parse_toml(&text)?;
         change(&mut doc);
         self.replace_text(doc.to_string())
     }
@@ -241,9 +239,7 @@ impl Document {
 
     /// The text as a TOML document (it always parses: it loaded).
     fn parsed(&self) -> Result<toml_edit::DocumentMut, SceneError> {
-        self.text.parse().map_err(|e: toml_edit::TomlError| {
-            SceneError::usage(format!("the scene is not valid TOML: {}", e.message()))
-        })
+        parse_toml(&self.text)
     }
 
     /// True when there is an edit to undo.
@@ -318,6 +314,12 @@ impl Document {
 /// Loads `text` as the scene file `path` (relative paths resolve from its
 /// folder) or as an unsaved scene, reusing the analyses and compiled
 /// objects of `caches` (so an edit recompiles only what it changed).
+/// `text` as a TOML document to edit.
+fn parse_toml(text: &str) -> Result<toml_edit::DocumentMut, SceneError> {
+    text.parse()
+        .map_err(|e: toml_edit::TomlError| SceneError::usage(format!("the scene is not valid TOML: {}", e.message())))
+}
+
 fn load(text: &str, path: Option<&Path>, caches: &Caches) -> Result<Scene, SceneError> {
     let name = path.map_or("untitled.toml".to_string(), |p| p.display().to_string());
     let options = LoadOptions {

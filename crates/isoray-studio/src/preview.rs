@@ -164,7 +164,7 @@ impl Preview {
 }
 
 /// Converts linear RGB to sRGB RGBA bytes.
-fn rgba(color: &[[f32; 3]]) -> Vec<u8> {
+pub(crate) fn rgba(color: &[[f32; 3]]) -> Vec<u8> {
     let srgb = isoray_shade::srgb::to_srgb8(color);
     let mut out = Vec::with_capacity(color.len() * 4);
     for px in srgb.chunks_exact(3) {

@@ -197,8 +197,8 @@ pub fn candidate(text: &str, form: &SurfaceForm) -> Result<String, FieldError> {
         field: Field::Other,
         message: format!("the scene is not valid TOML: {}", e.message()),
     })?;
-    let existing = rows(text);
-    if form.original.as_deref() != Some(name) && existing.iter().any(|r| r.name == name) {
+    let taken = doc.get("surface").and_then(|s| s.get(name)).is_some();
+    if form.original.as_deref() != Some(name) && taken {
         return Err(FieldError {
             field: Field::Name,
             message: format!("the scene already has a surface named `{name}`"),

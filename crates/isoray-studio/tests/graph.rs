@@ -2,28 +2,14 @@
 //! scene's shapes open as a graph that prints back to the same expression,
 //! and edits of the graph print the shape text they should.
 
-use std::path::PathBuf;
+mod common;
+use common::examples;
 
 use egui_snarl::{InPinId, OutPinId};
 use isoray_shape::syntax::{parse, without_spans};
 use isoray_studio::graph::model::{self, from_objects, object_text, Form, GraphNode, Names, ObjectText};
 use isoray_studio::graph::{same_shape, store, view, GraphEditor};
 use isoray_studio::Document;
-
-fn examples() -> Vec<PathBuf> {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples");
-    let mut out: Vec<PathBuf> = Vec::new();
-    for dir in [root.clone(), root.join("realtime")] {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            if p.extension().is_some_and(|x| x == "toml") {
-                out.push(p);
-            }
-        }
-    }
-    out.sort();
-    out
-}
 
 fn graph_of(text: &str) -> (Document, egui_snarl::Snarl<GraphNode>, Vec<egui_snarl::NodeId>, Names) {
     let doc = Document::from_text(text, None).unwrap();

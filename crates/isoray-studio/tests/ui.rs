@@ -11,6 +11,9 @@ use egui_kittest::Harness;
 use isoray_studio::graph::GraphNode;
 use isoray_studio::{Studio, StudioOptions};
 
+#[allow(dead_code)] // each test file uses part of it
+mod common;
+
 fn studio_on(path: &std::path::Path) -> Harness<'static, Studio> {
     studio_sized(path, egui::Vec2::new(900.0, 600.0))
 }
@@ -33,8 +36,7 @@ fn studio_sized(path: &std::path::Path, size: egui::Vec2) -> Harness<'static, St
 fn example_copy(name: &str) -> (tempfile::TempDir, std::path::PathBuf, String) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("scene.toml");
-    let examples = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
-    std::fs::copy(examples.join(name), &path).unwrap();
+    std::fs::copy(common::examples_dir().join(name), &path).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
     (dir, path, text)
 }

@@ -8,20 +8,8 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-fn examples() -> Vec<PathBuf> {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples");
-    let mut out = Vec::new();
-    for dir in [root.clone(), root.join("realtime")] {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            if p.extension().is_some_and(|x| x == "toml") {
-                out.push(p);
-            }
-        }
-    }
-    out.sort();
-    out
-}
+mod common;
+use common::examples;
 
 #[test]
 fn the_window_opens_on_every_example_and_its_screenshot_shows_the_scene() {

@@ -74,8 +74,7 @@ impl GraphEditor {
         }
         self.thumbs.clear();
         let names = Names::of(doc.scene());
-        let shapes: Vec<String> = ObjectText::of_scene(doc.scene()).into_iter().map(|o| o.shape).collect();
-        if shapes != self.shapes || names.params != self.names.params || names.surfaces != self.names.surfaces {
+        if shapes_of(doc) != self.shapes || names.params != self.names.params || names.surfaces != self.names.surfaces {
             self.rebuild(doc);
             return;
         }
@@ -127,13 +126,13 @@ impl GraphEditor {
     /// text (their node shows why). Returns whether the document changed.
     pub fn commit(&mut self, doc: &mut Document) -> Result<bool, SceneError> {
         let texts = self.check();
-        let current = ObjectText::of_scene(doc.scene());
+        let current = shapes_of(doc);
         let mut edits = Vec::new();
         for (i, text) in texts.iter().enumerate() {
             let (Some(new), Some(old)) = (text, current.get(i)) else {
                 continue;
             };
-            if !same_shape(new, &old.shape) {
+            if !same_shape(new, old) {
                 let quoted = toml_edit::Value::from(new.as_str()).to_string();
                 edits.push(format!("object.{i}.shape={}", quoted.trim()));
             }
@@ -142,10 +141,15 @@ impl GraphEditor {
         let before = doc.text().to_string();
         doc.edit_with(&edits, |toml| store::write(toml, &layouts))?;
         self.synced = doc.text().to_string();
-        self.shapes = ObjectText::of_scene(doc.scene()).into_iter().map(|o| o.shape).collect();
+        self.shapes = shapes_of(doc);
         self.layout = layouts;
         Ok(doc.text() != before)
     }
+}
+
+/// Each object's shape text, as written in `doc`.
+fn shapes_of(doc: &Document) -> Vec<String> {
+    doc.scene().objects.iter().map(|o| o.source.clone()).collect()
 }
 
 /// True when two shape texts parse to the same expression (or are the

@@ -552,7 +552,6 @@ pub fn default_slot(name: &str, param: &str, kind: Param, category: Category) ->
         (_, "n", _) if name.starts_with("smooth_") => String::new(),
         (_, "k", _) => "0.25".into(),
         (_, _, Param::V) => "vec3(0.5, 0.5, 0.5)".into(),
-        (_, "angle", _) => "0.5".into(),
         _ => "0.5".into(),
     }
 }

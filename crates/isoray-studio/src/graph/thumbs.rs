@@ -173,10 +173,5 @@ pub fn thumbnail_scene(scene_text: &str, name: &str, shape: &str) -> Option<isor
 fn render(scene_text: &str, name: &str, shape: &str) -> Option<Vec<u8>> {
     let scene = thumbnail_scene(scene_text, name, shape)?;
     let (img, _) = isoray_render::render(&scene, &RenderOptions::default());
-    let srgb = isoray_shade::srgb::to_srgb8(&img.color);
-    let mut out = Vec::with_capacity(srgb.len() / 3 * 4);
-    for px in srgb.chunks_exact(3) {
-        out.extend_from_slice(&[px[0], px[1], px[2], 255]);
-    }
-    Some(out)
+    Some(crate::preview::rgba(&img.color))
 }
