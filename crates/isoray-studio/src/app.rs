@@ -58,6 +58,8 @@ pub struct Studio {
     live: Option<(String, f64)>,
     /// A live vector while a direction is dragged: (key, value).
     live_vec: Option<(String, [f64; 3])>,
+    /// A node's value while it is dragged in the graph.
+    slot_drag: Option<SlotDrag>,
     /// Status line: the last error or message.
     status: String,
     dialog: Option<FileDialog>,
@@ -79,6 +81,23 @@ pub struct Studio {
     surfaces_tab: bool,
     /// The surface dialog, when open: its fields and the check of them.
     surface_dialog: Option<(SurfaceForm, Option<Check>)>,
+}
+
+/// A node value being dragged in the graph. The preview shows the scene
+/// with that slot read from a hidden parameter (compiled once, when the
+/// drag starts), so each new value is a runtime input: no shape is
+/// compiled again, and the GPU keeps its pipeline. On release the number
+/// is written into the shape text as one edit.
+struct SlotDrag {
+    node: egui_snarl::NodeId,
+    input: usize,
+    /// The hidden parameter's name.
+    param: String,
+    /// The scene with the slot bound to `param`; None when the slot cannot
+    /// be a parameter (then the preview waits for the release).
+    scene: Option<Scene>,
+    /// The value the preview was last asked for.
+    value: Option<Value>,
 }
 
 /// The frame time a drag aims at, ms.
@@ -121,6 +140,7 @@ impl Studio {
             orbit: None,
             live: None,
             live_vec: None,
+            slot_drag: None,
             status,
             dialog: None,
             confirm: None,
@@ -148,9 +168,19 @@ impl Studio {
     }
 
     /// The scene the preview should show: the document's, with the drag in
-    /// progress (camera or slider) and the preview's size.
-    fn preview_scene(&self) -> Scene {
-        let mut scene = self.doc.scene().clone();
+    /// progress (camera, slider or node value) and the preview's size.
+    pub fn preview_scene(&self) -> Scene {
+        let bound = self.slot_drag.as_ref().and_then(|d| Some((d, d.scene.as_ref()?)));
+        let mut scene = match bound {
+            Some((d, scene)) => {
+                let mut scene = scene.clone();
+                if let Some(v) = d.value {
+                    let _ = scene.set_param(&d.param, v);
+                }
+                scene
+            }
+            None => self.doc.scene().clone(),
+        };
         if let Some(o) = &self.orbit {
             o.apply(&mut scene.camera);
         }
@@ -189,7 +219,62 @@ impl Studio {
 
     /// True while a drag (camera or slider) is in progress.
     fn interacting(&self) -> bool {
-        self.orbit.is_some() || self.live.is_some() || self.live_vec.is_some()
+        self.orbit.is_some() || self.live.is_some() || self.live_vec.is_some() || self.slot_drag.is_some()
+    }
+
+    /// Follows a drag of a node's value (`dragging`: the slot dragged this
+    /// frame, if any): binds the slot to a hidden parameter when the drag
+    /// starts, asks for a frame when the value moves, and lets go when the
+    /// drag ends.
+    fn follow_slot_drag(&mut self, dragging: Option<(egui_snarl::NodeId, usize)>) {
+        let Some((node, input)) = dragging else {
+            if self.slot_drag.take().is_some() {
+                self.request_preview();
+            }
+            return;
+        };
+        if self.slot_drag.as_ref().map(|d| (d.node, d.input)) != Some((node, input)) {
+            self.slot_drag = Some(self.bind_slot(node, input));
+        }
+        let value = self.graph.slot_value(node, input);
+        let d = self.slot_drag.as_mut().expect("bound above");
+        if d.scene.is_some() && d.value != value {
+            d.value = value;
+            self.request_preview();
+        }
+    }
+
+    /// The scene with slot `input` of `node` read from a new hidden
+    /// parameter holding its value.
+    fn bind_slot(&mut self, node: egui_snarl::NodeId, input: usize) -> SlotDrag {
+        let names = &self.graph.names;
+        let param = (0..)
+            .map(|i| {
+                if i == 0 {
+                    "studio_drag".to_string()
+                } else {
+                    format!("studio_drag{i}")
+                }
+            })
+            .find(|n| !names.params.contains(n) && !names.surfaces.contains_key(n))
+            .expect("a free name");
+        let value = self.graph.slot_value(node, input);
+        let shapes = self.graph.shapes_with_slot(node, input, &param);
+        let scene = value.filter(|_| !shapes.is_empty()).and_then(|v| {
+            let mut overrides: Vec<String> = shapes
+                .iter()
+                .map(|(i, text)| crate::graph::shape_edit(*i, text))
+                .collect();
+            overrides.push(format!("params.{param}={}", value_text(v)));
+            self.doc.variant(&overrides).ok()
+        });
+        SlotDrag {
+            node,
+            input,
+            param,
+            scene,
+            value: None,
+        }
     }
 
     fn request_preview(&mut self) {
@@ -557,6 +642,7 @@ impl Studio {
             scene_name: &scene_name,
             search,
             changed: false,
+            dragging: None,
         };
         let style = egui_snarl::ui::SnarlStyle {
             collapsible: Some(true),
@@ -567,9 +653,13 @@ impl Studio {
             .style(style)
             .show(snarl, &mut viewer, ui);
         let released = ui.input(|i| i.pointer.any_released());
-        if viewer.changed || (released && self.graph.layout_changed()) {
+        let (changed, dragging) = (viewer.changed, viewer.dragging);
+        if changed || (released && self.graph.layout_changed()) {
+            self.slot_drag = None;
             let r = self.graph.commit(&mut self.doc).map(|_| ());
             self.done(r);
+        } else {
+            self.follow_slot_drag(dragging);
         }
     }
 
@@ -1023,6 +1113,15 @@ fn choice<T: Named + std::fmt::Debug>(ui: &mut egui::Ui, label: &str, value: &mu
 /// The file's name of a choice's value.
 fn name_of<T: Named>(value: T) -> &'static str {
     T::NAMES.iter().find(|(_, v)| *v == value).map_or("?", |(n, _)| n)
+}
+
+/// A parameter value as TOML: a number or an array of numbers.
+fn value_text(v: Value) -> String {
+    match v {
+        Value::Float(x) => format!("{x:?}"),
+        Value::Vec2([x, y]) => format!("[{x:?}, {y:?}]"),
+        Value::Vec3([x, y, z]) => format!("[{x:?}, {y:?}, {z:?}]"),
+    }
 }
 
 fn vec3(v: [f64; 3]) -> String {

@@ -301,6 +301,14 @@ impl Document {
             .map_or("untitled.toml".to_string(), |p| p.display().to_string())
     }
 
+    /// The scene of the text with `overrides` (`KEY=VALUE` edits, as
+    /// `--set` takes them) applied, loaded with this document's caches;
+    /// the document does not change. The studio uses it for previews of
+    /// edits in progress.
+    pub fn variant(&self, overrides: &[String]) -> Result<Scene, SceneError> {
+        load_with(&self.text, self.path.as_deref(), &self.caches, overrides)
+    }
+
     /// Loads the scene again after undo or redo (texts on the stacks all
     /// loaded once; a file they name may have gone since, and then the
     /// scene stays as it was).
@@ -311,23 +319,28 @@ impl Document {
     }
 }
 
-/// Loads `text` as the scene file `path` (relative paths resolve from its
-/// folder) or as an unsaved scene, reusing the analyses and compiled
-/// objects of `caches` (so an edit recompiles only what it changed).
 /// `text` as a TOML document to edit.
 fn parse_toml(text: &str) -> Result<toml_edit::DocumentMut, SceneError> {
     text.parse()
         .map_err(|e: toml_edit::TomlError| SceneError::usage(format!("the scene is not valid TOML: {}", e.message())))
 }
 
+/// Loads `text` as the scene file `path` (relative paths resolve from its
+/// folder) or as an unsaved scene, reusing the analyses and compiled
+/// objects of `caches` (so an edit recompiles only what it changed).
 fn load(text: &str, path: Option<&Path>, caches: &Caches) -> Result<Scene, SceneError> {
+    load_with(text, path, caches, &[])
+}
+
+/// [`load`] with `--set` overrides.
+fn load_with(text: &str, path: Option<&Path>, caches: &Caches, overrides: &[String]) -> Result<Scene, SceneError> {
     let name = path.map_or("untitled.toml".to_string(), |p| p.display().to_string());
     let options = LoadOptions {
         analyses: Some(caches.analyses.clone()),
         objects: Some(caches.objects.clone()),
         ..Default::default()
     };
-    isoray_scene::load_str_with(text, &name, &[], &options)
+    isoray_scene::load_str_with(text, &name, overrides, &options)
 }
 
 /// What loads of one document share.

@@ -261,6 +261,81 @@ fn a_scene_built_by_ui_actions_renders_as_the_reference_file() {
 }
 
 #[test]
+fn dragging_a_node_value_moves_the_preview_without_a_new_shape_and_release_writes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, isoray_studio::document::NEW_SCENE).unwrap();
+    let mut h = studio_sized(&path, egui::Vec2::new(1400.0, 900.0));
+    let original = h.state().document().text().to_string();
+    let sphere = node_titled(&h, "sphere");
+    // The graph is drawn scaled: its layer's transform maps the widget's
+    // rectangle to the screen.
+    let to_screen = h.ctx.memory(|m| {
+        assert_eq!(m.to_global.len(), 1, "one transformed layer, the graph's");
+        *m.to_global.values().next().unwrap()
+    });
+    let r = to_screen * h.get_by_label(&format!("sphere #{sphere} r")).rect().center();
+
+    // Press on the sphere's radius and drag right in two steps.
+    h.hover_at(r);
+    h.run_steps(1);
+    h.drag_at(r);
+    h.run_steps(1);
+    h.hover_at(r + egui::vec2(20.0, 0.0));
+    h.run_steps(2);
+    let first = h.state().preview_scene();
+    h.hover_at(r + egui::vec2(50.0, 0.0));
+    h.run_steps(2);
+    let second = h.state().preview_scene();
+
+    // While dragging the file is untouched, the preview reads the radius
+    // from a hidden parameter, and its shape (the tape the GPU compiles)
+    // is the same at both values: only a runtime input moved.
+    assert_eq!(h.state().document().text(), original);
+    assert!(
+        second.objects[1].source.contains("studio_drag"),
+        "{}",
+        second.objects[1].source
+    );
+    assert!(first.objects[1].shape.tape() == second.objects[1].shape.tape());
+    let value = |s: &isoray_scene::Scene| match s.params.iter().find(|(n, _)| n == "studio_drag") {
+        Some((_, isoray_shape::Value::Float(v))) => *v,
+        other => panic!("a number parameter, found {other:?}"),
+    };
+    let (v1, v2) = (value(&first), value(&second));
+    assert!(v2 > v1 && v1 > 1.0, "the radius grows with the drag: {v1}, {v2}");
+
+    // Release: one edit writes the number into the shape text, and the
+    // file's scene renders exactly as the preview did at that value.
+    let during = h.state().preview_scene();
+    h.drop_at(r + egui::vec2(50.0, 0.0));
+    h.run_steps(3);
+    let text = h.state().document().scene().objects[1].source.clone();
+    let written: f64 = text
+        .trim_end_matches(')')
+        .rsplit(", ")
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap_or_else(|_| panic!("a radius in {text}"));
+    assert!((written - v2).abs() < 1e-9, "{text} holds {v2}");
+    assert!(!h.state().preview_scene().objects[1].source.contains("studio_drag"));
+    let small = |s: &isoray_scene::Scene| {
+        let mut s = s.clone();
+        s.render.width = 80;
+        s.render.height = 50;
+        s.render.aa = 1;
+        isoray_render::render(&s, &isoray_render::RenderOptions::default())
+            .0
+            .color
+    };
+    assert!(small(&during) == small(h.state().document().scene()));
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().document().text(), original);
+}
+
+#[test]
 fn the_surfaces_tab_lists_the_scene_surfaces_and_opens_one_in_the_dialog() {
     let (_dir, path, original) = example_copy("surfaces.toml");
     let mut h = studio_sized(&path, egui::Vec2::new(1400.0, 900.0));

@@ -17,6 +17,7 @@ use std::collections::HashMap;
 
 use egui_snarl::{NodeId, Snarl};
 use isoray_scene::SceneError;
+use isoray_shape::Value;
 
 use crate::Document;
 pub use model::{Form, GraphError, GraphNode, Names, ObjectText};
@@ -133,8 +134,7 @@ impl GraphEditor {
                 continue;
             };
             if !same_shape(new, old) {
-                let quoted = toml_edit::Value::from(new.as_str()).to_string();
-                edits.push(format!("object.{i}.shape={}", quoted.trim()));
+                edits.push(shape_edit(i, new));
             }
         }
         let layouts = store::capture(&self.snarl, &self.objects);
@@ -145,6 +145,59 @@ impl GraphEditor {
         self.layout = layouts;
         Ok(doc.text() != before)
     }
+}
+
+impl GraphEditor {
+    /// The value slot `input` of `node` holds when it is a number or a
+    /// vector of numbers (what a drag edits).
+    pub fn slot_value(&self, node: NodeId, input: usize) -> Option<Value> {
+        let GraphNode::Op { slots, .. } = self.snarl.get_node(node)? else {
+            return None;
+        };
+        let text = slots.get(input)?.trim();
+        if let Ok(v) = text.parse::<f64>() {
+            return Some(Value::Float(v));
+        }
+        match view::numeric_vec(text)?.as_slice() {
+            [x, y] => Some(Value::Vec2([*x, *y])),
+            [x, y, z] => Some(Value::Vec3([*x, *y, *z])),
+            _ => None,
+        }
+    }
+
+    /// The objects' shapes with slot `input` of `node` reading `name`
+    /// instead of its text: (object index, shape text) for every object
+    /// whose shape that changes. The graph is left as it was.
+    pub fn shapes_with_slot(&mut self, node: NodeId, input: usize, name: &str) -> Vec<(usize, String)> {
+        let before = self.check();
+        let Some(GraphNode::Op { slots, .. }) = self.snarl.get_node_mut(node) else {
+            return Vec::new();
+        };
+        let Some(slot) = slots.get_mut(input) else {
+            return Vec::new();
+        };
+        let kept = std::mem::replace(slot, name.to_string());
+        let after = self.check();
+        if let Some(GraphNode::Op { slots, .. }) = self.snarl.get_node_mut(node) {
+            slots[input] = kept;
+        }
+        self.check();
+        before
+            .into_iter()
+            .zip(after)
+            .enumerate()
+            .filter_map(|(i, (b, a))| match (b, a) {
+                (Some(b), Some(a)) if a != b => Some((i, a)),
+                _ => None,
+            })
+            .collect()
+    }
+}
+
+/// The edit (`--set` syntax) that sets object `i`'s shape to `text`.
+pub fn shape_edit(i: usize, text: &str) -> String {
+    let quoted = toml_edit::Value::from(text).to_string();
+    format!("object.{i}.shape={}", quoted.trim())
 }
 
 /// Each object's shape text, as written in `doc`.

@@ -42,6 +42,8 @@ pub struct Viewer<'a> {
     pub search: &'a mut String,
     /// Set when an edit should be written back to the document.
     pub changed: bool,
+    /// The slot (node, input) whose value is being dragged this frame.
+    pub dragging: Option<(NodeId, usize)>,
 }
 
 /// One palette entry: its label, tooltip and the node it makes.
@@ -260,38 +262,55 @@ fn name_widget(r: &egui::Response, kind: egui::WidgetType, name: &str) {
     r.widget_info(|| egui::WidgetInfo::labeled(kind, true, name));
 }
 
-/// Edits a slot's text in place; returns true when the edit is finished
-/// (a drag released, a field left), so it should be written back. `name`
-/// is the accessible name of the widgets (`NAME`, or `NAME.x`… for a
-/// vector).
-pub fn slot_editor(ui: &mut Ui, text: &mut String, name: &str) -> bool {
+/// What a slot editor did this frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SlotEdit {
+    /// The edit is finished (a drag released, a field left): write it back.
+    pub done: bool,
+    /// A value is being dragged (the text holds the value so far).
+    pub dragging: bool,
+}
+
+/// Edits a slot's text in place. `name` is the accessible name of the
+/// widgets (`NAME`, or `NAME.x`… for a vector).
+pub fn slot_editor(ui: &mut Ui, text: &mut String, name: &str) -> SlotEdit {
     let trimmed = text.trim().to_string();
+    let finished = |r: &egui::Response| {
+        r.drag_stopped() || (r.lost_focus() && !r.dragged()) || (r.changed() && !r.dragged() && !r.has_focus())
+    };
     if let Ok(mut v) = trimmed.parse::<f64>() {
         let r = ui.add(egui::DragValue::new(&mut v).speed(0.01).max_decimals(4));
         name_widget(&r, egui::WidgetType::DragValue, name);
         if r.changed() {
             *text = number_text(v);
         }
-        return r.drag_stopped() || (r.lost_focus() && !r.dragged()) || (r.changed() && !r.dragged() && !r.has_focus());
+        return SlotEdit {
+            done: finished(&r),
+            dragging: r.dragged() && !r.drag_stopped(),
+        };
     }
     if let Some(mut vs) = numeric_vec(&trimmed) {
-        let mut done = false;
+        let mut edit = SlotEdit::default();
         let mut changed = false;
         for (v, c) in vs.iter_mut().zip(["x", "y", "z"]) {
             let r = ui.add(egui::DragValue::new(v).speed(0.01).max_decimals(4));
             name_widget(&r, egui::WidgetType::DragValue, &format!("{name}.{c}"));
             changed |= r.changed();
-            done |= r.drag_stopped() || r.lost_focus() || (r.changed() && !r.dragged() && !r.has_focus());
+            edit.done |= finished(&r);
+            edit.dragging |= r.dragged() && !r.drag_stopped();
         }
         if changed {
             let inner: Vec<String> = vs.iter().map(|v| number_text(*v)).collect();
             *text = format!("vec{}({})", if vs.len() == 2 { 2 } else { 3 }, inner.join(", "));
         }
-        return done;
+        return edit;
     }
     let r = ui.add(egui::TextEdit::singleline(text).desired_width(120.0).hint_text("value"));
     name_widget(&r, egui::WidgetType::TextEdit, name);
-    r.lost_focus()
+    SlotEdit {
+        done: r.lost_focus(),
+        dragging: false,
+    }
 }
 
 /// The numbers of `vec3(a, b, c)`, `vec3(a)` or `vec2(a, b)` written with
@@ -383,13 +402,13 @@ impl SnarlViewer<GraphNode> for Viewer<'_> {
         ui.label(&label);
         let mut missing = !connected && !editable;
         if !connected && editable {
-            let mut commit = false;
             if let GraphNode::Op { slots, .. } = &mut snarl[id.node] {
-                commit = slot_editor(ui, &mut slots[id.input], &format!("{title} #{} {label}", id.node.0));
+                let edit = slot_editor(ui, &mut slots[id.input], &format!("{title} #{} {label}", id.node.0));
                 missing = slots[id.input].trim().is_empty();
-            }
-            if commit {
-                self.changed = true;
+                self.changed |= edit.done;
+                if edit.dragging {
+                    self.dragging = Some((id.node, id.input));
+                }
             }
         }
         let r = ui
