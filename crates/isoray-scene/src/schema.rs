@@ -337,6 +337,19 @@ macro_rules! settings {
                 Ok($name { $($field,)* ..d })
             }
 
+            /// The value of one of this table's keys as the file would
+            /// write it (`32.0`, `[0.8, 0.8, 0.8]`, `"pow"`, `true`); None
+            /// when `key` is not one of them.
+            #[allow(dead_code)]
+            pub fn value_text(&self, key: &str) -> Option<String> {
+                $(
+                    if key == stringify!($field) {
+                        return Some($crate::schema::DocValue::doc_text(&self.$field));
+                    }
+                )*
+                None
+            }
+
             /// Sets a numeric key from numbers checked against its
             /// description: `None` when `key` is not one of this table's
             /// numeric keys, `Some(Err(expected))` when the value does not fit.

@@ -247,6 +247,18 @@ shape = "sphere(p, 1.0)"
     assert!(s.set_value("material.m.model", &[1.0]).is_err());
     s.set_value("material.m.checker_size", &[2.0]).unwrap();
     assert_eq!(s.materials[1].checker.map(|c| c.1), Some(2.0));
+    // Every value key reads back as the file would write it.
+    s.set_value("material.m.diffuse", &[0.25, 0.5, 1.0]).unwrap();
+    let m = &s.materials[1];
+    assert_eq!(m.value_text("diffuse").as_deref(), Some("[0.25, 0.5, 1.0]"));
+    assert_eq!(m.value_text("shininess").as_deref(), Some("32.0"));
+    assert_eq!(m.value_text("model").as_deref(), Some("\"blinn-phong\""));
+    assert_eq!(m.value_text("specular_fresnel").as_deref(), Some("false"));
+    assert_eq!(m.value_text("checker"), None, "not a value key");
+    for k in isoray_scene::material_value_keys() {
+        assert!(m.value_text(k.name).is_some(), "{}", k.name);
+    }
+    assert_eq!(s.lights[0].value_text("samples").as_deref(), Some("16"));
 }
 
 /// A period of `repeat` that reads a parameter or the time must stay

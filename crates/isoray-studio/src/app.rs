@@ -5,9 +5,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use eframe::egui;
-use isoray_scene::schema::Named;
 use isoray_scene::Scene;
 use isoray_shape::Value;
+
+pub mod playground;
 
 use crate::document::Document;
 use crate::graph::GraphEditor;
@@ -389,202 +390,6 @@ impl Studio {
                 self.doc = Document::new_scene();
                 self.request_preview();
             }
-        }
-    }
-
-    /// The playground: parameters, render settings, lights and camera,
-    /// each control bound to the scene key it edits.
-    fn playground(&mut self, ui: &mut egui::Ui) {
-        let scene = self.doc.scene().clone();
-        egui::ScrollArea::vertical().show(ui, |ui| {
-            egui::CollapsingHeader::new("Parameters")
-                .default_open(true)
-                .show(ui, |ui| self.parameters(ui, &scene));
-            egui::CollapsingHeader::new("Render")
-                .default_open(true)
-                .show(ui, |ui| self.render_settings(ui, &scene));
-            egui::CollapsingHeader::new("Lights")
-                .default_open(true)
-                .show(ui, |ui| self.lights(ui, &scene));
-            egui::CollapsingHeader::new("Camera")
-                .default_open(false)
-                .show(ui, |ui| {
-                    let c = &scene.camera;
-                    self.slider(ui, "fov", "camera.fov", c.fov, 5.0..=120.0);
-                    ui.label(format!("position {}", vec3(c.position)));
-                    ui.label(format!("target {}", vec3(c.target)));
-                    ui.label("Drag the preview to orbit, scroll to zoom.");
-                });
-        });
-    }
-
-    fn parameters(&mut self, ui: &mut egui::Ui, scene: &Scene) {
-        let params = scene.library.params().to_vec();
-        if params.is_empty() {
-            ui.label("The scene has no [params].");
-        }
-        for (name, value) in params {
-            let Value::Float(v) = value else {
-                ui.label(format!("{name} = {value:?} (vectors are edited in the file)"));
-                continue;
-            };
-            let key = format!("params.{name}");
-            let range = scene
-                .param_ranges
-                .iter()
-                .find(|r| r.key == key)
-                .map(|r| r.range)
-                .unwrap_or([v.min(0.0) - 1.0, v.max(0.0) + 1.0]);
-            self.slider(ui, &name, &key, v, range[0]..=range[1]);
-        }
-    }
-
-    /// A slider for `key`: the preview follows while dragging (no shader
-    /// rebuild), and release commits one edit.
-    fn slider(&mut self, ui: &mut egui::Ui, label: &str, key: &str, value: f64, range: std::ops::RangeInclusive<f64>) {
-        let mut v = match &self.live {
-            Some((k, x)) if k == key => *x,
-            _ => value,
-        };
-        let r = ui.add(egui::Slider::new(&mut v, range).text(label));
-        if r.changed() {
-            self.live = Some((key.to_string(), v));
-            self.request_preview();
-        }
-        if r.drag_stopped() || (r.changed() && !r.dragged()) {
-            self.live = None;
-            self.edit(vec![format!("{key}={v}")]);
-        }
-    }
-
-    /// A direction as azimuth and elevation sliders (the thesis's knobs),
-    /// shown live while dragged and written as `[x, y, z]` on release.
-    fn direction(&mut self, ui: &mut egui::Ui, key: &str, value: [f64; 3]) {
-        let d = match &self.live_vec {
-            Some((k, v)) if k == key => *v,
-            _ => value,
-        };
-        let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-12);
-        let mut azimuth = d[2].atan2(d[0]).to_degrees();
-        let mut elevation = (d[1] / n).clamp(-1.0, 1.0).asin().to_degrees();
-        let a = ui.add(egui::Slider::new(&mut azimuth, -180.0..=180.0).text("azimuth °"));
-        let e = ui.add(egui::Slider::new(&mut elevation, -90.0..=90.0).text("elevation °"));
-        if a.changed() || e.changed() {
-            let (az, el) = (azimuth.to_radians(), elevation.to_radians());
-            let v = [el.cos() * az.cos(), el.sin(), el.cos() * az.sin()];
-            self.live_vec = Some((key.to_string(), v));
-            self.request_preview();
-        }
-        let released = |r: &egui::Response| r.drag_stopped() || (r.changed() && !r.dragged());
-        if released(&a) || released(&e) {
-            if let Some((_, v)) = self.live_vec.take() {
-                self.edit(vec![format!("{key}=[{}, {}, {}]", v[0], v[1], v[2])]);
-            }
-        }
-    }
-
-    /// A position as three drag values, shown live while dragged and
-    /// written on release.
-    fn position(&mut self, ui: &mut egui::Ui, key: &str, value: [f64; 3]) {
-        let mut v = match &self.live_vec {
-            Some((k, x)) if k == key => *x,
-            _ => value,
-        };
-        let mut changed = false;
-        let mut done = false;
-        ui.horizontal(|ui| {
-            ui.label("position");
-            for c in &mut v {
-                let r = ui.add(egui::DragValue::new(c).speed(0.05));
-                changed |= r.changed();
-                done |= r.drag_stopped() || r.lost_focus() || (r.changed() && !r.dragged() && !r.has_focus());
-            }
-        });
-        if changed {
-            self.live_vec = Some((key.to_string(), v));
-            self.request_preview();
-        }
-        if done {
-            if let Some((_, v)) = self.live_vec.take() {
-                self.edit(vec![format!("{key}=[{}, {}, {}]", v[0], v[1], v[2])]);
-            }
-        }
-    }
-
-    fn render_settings(&mut self, ui: &mut egui::Ui, scene: &Scene) {
-        let r = &scene.render;
-        let mut shadows = r.shadows;
-        choice(ui, "Shadows", &mut shadows);
-        if shadows != r.shadows {
-            self.edit(vec![format!("render.shadows={}", name_of(shadows))]);
-        }
-        let mut ao = r.ao;
-        if ui.checkbox(&mut ao, "Ambient occlusion").changed() {
-            self.edit(vec![format!("render.ao={ao}")]);
-        }
-        let mut aa = r.aa;
-        if ui
-            .add(egui::Slider::new(&mut aa, 1..=4).text("Supersampling"))
-            .changed()
-        {
-            self.edit(vec![format!("render.aa={aa}")]);
-        }
-        let mut view = r.view;
-        choice(ui, "View", &mut view);
-        if view != r.view {
-            self.edit(vec![format!("render.view={}", name_of(view))]);
-        }
-        let mut normals = r.normals;
-        choice(ui, "Normals", &mut normals);
-        if normals != r.normals {
-            self.edit(vec![format!("render.normals={}", name_of(normals))]);
-        }
-        self.slider(ui, "blend (smooth union k)", "render.blend", r.blend, 0.0..=1.0);
-    }
-
-    fn lights(&mut self, ui: &mut egui::Ui, scene: &Scene) {
-        if scene.lights.is_empty() {
-            ui.label("No lights.");
-        }
-        if ui.button("Add light").clicked() {
-            let r = self.doc.push_table(
-                "light",
-                &[("kind", "\"directional\""), ("direction", "[-1.0, 2.0, 1.0]")],
-            );
-            self.done(r);
-        }
-        for (i, light) in scene.lights.iter().enumerate() {
-            ui.push_id(i, |ui| {
-                ui.horizontal(|ui| {
-                    ui.label(format!("Light {i}"));
-                    if ui.small_button("Remove").clicked() {
-                        let r = self.doc.remove_table("light", i);
-                        self.done(r);
-                    }
-                });
-                self.slider(
-                    ui,
-                    "intensity",
-                    &format!("light.{i}.intensity"),
-                    light.intensity,
-                    0.0..=4.0,
-                );
-                self.slider(ui, "size", &format!("light.{i}.size"), light.size, 0.01..=2.0);
-                match light.kind {
-                    isoray_scene::LightKind::Directional { direction } => {
-                        self.direction(ui, &format!("light.{i}.direction"), direction);
-                    }
-                    isoray_scene::LightKind::Point { position } | isoray_scene::LightKind::Sphere { position, .. } => {
-                        self.position(ui, &format!("light.{i}.position"), position);
-                    }
-                    _ => {}
-                }
-                let c = light.color;
-                let mut rgb = [c[0] as f32, c[1] as f32, c[2] as f32];
-                if ui.color_edit_button_rgb(&mut rgb).changed() {
-                    self.edit(vec![format!("light.{i}.color=[{}, {}, {}]", rgb[0], rgb[1], rgb[2])]);
-                }
-            });
         }
     }
 
@@ -1099,22 +904,6 @@ impl Studio {
     }
 }
 
-/// A combo box over every value of a named choice.
-fn choice<T: Named + std::fmt::Debug>(ui: &mut egui::Ui, label: &str, value: &mut T) {
-    egui::ComboBox::from_label(label)
-        .selected_text(name_of(*value))
-        .show_ui(ui, |ui| {
-            for (name, v) in T::NAMES {
-                ui.selectable_value(value, *v, *name);
-            }
-        });
-}
-
-/// The file's name of a choice's value.
-fn name_of<T: Named>(value: T) -> &'static str {
-    T::NAMES.iter().find(|(_, v)| *v == value).map_or("?", |(n, _)| n)
-}
-
 /// A parameter value as TOML: a number or an array of numbers.
 fn value_text(v: Value) -> String {
     match v {
@@ -1122,8 +911,4 @@ fn value_text(v: Value) -> String {
         Value::Vec2([x, y]) => format!("[{x:?}, {y:?}]"),
         Value::Vec3([x, y, z]) => format!("[{x:?}, {y:?}, {z:?}]"),
     }
-}
-
-fn vec3(v: [f64; 3]) -> String {
-    format!("[{:.3}, {:.3}, {:.3}]", v[0], v[1], v[2])
 }

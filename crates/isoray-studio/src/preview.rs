@@ -163,8 +163,8 @@ impl Preview {
     }
 }
 
-/// Converts linear RGB to sRGB RGBA bytes.
-pub(crate) fn rgba(color: &[[f32; 3]]) -> Vec<u8> {
+/// Converts linear RGB to sRGB RGBA bytes (what [`Frame::rgba`] holds).
+pub fn rgba(color: &[[f32; 3]]) -> Vec<u8> {
     let srgb = isoray_shade::srgb::to_srgb8(color);
     let mut out = Vec::with_capacity(color.len() * 4);
     for px in srgb.chunks_exact(3) {
@@ -207,7 +207,35 @@ fn worker(rx: Receiver<(u64, Scene)>, shared: Arc<Mutex<Shared>>, cpu_only: bool
                     cancel: Some(token.clone()),
                     ..Default::default()
                 };
-                match g.render(&scene, &opts) {
+                // Progressive refinement: with supersampling, one sample
+                // per pixel first (a 1/aa² of the work), shown at once,
+                // then the full frame.
+                let quick = (scene.render.aa > 1).then(|| {
+                    let mut q = scene.clone();
+                    q.render.aa = 1;
+                    q
+                });
+                let first = match &quick {
+                    Some(q) => match g.render(q, &opts) {
+                        Ok((img, _, _)) => {
+                            let mut s = lock();
+                            s.canvas = Canvas {
+                                id,
+                                width: w,
+                                height: h,
+                                color: img.color,
+                                dirty: true,
+                                ms: start.elapsed().as_secs_f64() * 1e3,
+                            };
+                            drop(s);
+                            wake();
+                            Ok(())
+                        }
+                        Err(e) => Err(e),
+                    },
+                    None => Ok(()),
+                };
+                match first.and_then(|()| g.render(&scene, &opts)) {
                     Ok((img, _, _)) => Ok(Some(img.color)),
                     Err(isoray_gpu::GpuError::Cancelled) => Ok(None),
                     Err(e) => Err(e.to_string()),

@@ -100,6 +100,136 @@ fn the_playground_edits_the_keys_it_claims_and_undo_restores_the_bytes() {
     assert!(!h.state().document().is_modified());
 }
 
+/// Sets a slider or drag value by its accessible name, as a screen reader
+/// would (an accessibility SetValue action).
+/// Picks `item` from the combo box named `combo`, then closes its list.
+/// (The list is drawn last: a material header of the same name comes
+/// before it.)
+fn pick(h: &mut Harness<'_, Studio>, combo: &str, item: &str) {
+    h.get_by_label(combo).click_accesskit();
+    h.run_steps(2);
+    h.get_all_by_label(item).last().unwrap().click_accesskit();
+    h.run_steps(3);
+    if h.query_all_by_label(item).count() > 0 {
+        h.key_press(egui::Key::Escape);
+        h.run_steps(2);
+    }
+}
+
+fn set_value(h: &Harness<'_, Studio>, label: &str, v: f64) {
+    use egui_kittest::kittest::NodeT;
+    let (target_node, target_tree) = h.get_by_label(label).accesskit_node().locate();
+    h.event(egui::Event::AccessKitActionRequest(egui::accesskit::ActionRequest {
+        action: egui::accesskit::Action::SetValue,
+        target_node,
+        target_tree,
+        data: Some(egui::accesskit::ActionData::NumericValue(v)),
+    }));
+}
+
+#[test]
+fn light_kinds_materials_and_the_camera_edit_their_keys() {
+    let (_dir, path, original) = example_copy("lighting.toml");
+    let mut h = studio_on(&path);
+    let scene = h.state().document().scene().clone();
+    let isoray_scene::LightKind::Directional { direction } = scene.lights[0].kind else {
+        panic!("light 0 of lighting.toml is directional");
+    };
+
+    // Light 0 becomes a point light: `kind` changes, `direction` goes, and
+    // `position` is the camera's distance from the target, towards where
+    // the light was. Nothing else in the file changes.
+    h.get_by_label("Materials").click_accesskit();
+    h.run_steps(2);
+    pick(&mut h, "light.0.kind", "point");
+    let text = h.state().document().text().to_string();
+    let reach = {
+        let (p, t) = (scene.camera.position, scene.camera.target);
+        ((p[0] - t[0]).powi(2) + (p[1] - t[1]).powi(2) + (p[2] - t[2]).powi(2)).sqrt()
+    };
+    let isoray_scene::LightKind::Point { position } = h.state().document().scene().lights[0].kind else {
+        panic!("a point light now:\n{text}");
+    };
+    for k in 0..3 {
+        let want = scene.camera.target[k] + direction[k] * reach;
+        assert!((position[k] - want).abs() < 1e-9, "{position:?}");
+    }
+    assert!(!text.contains("direction = [-1.0, 1.5, 1.0]"), "{text}");
+    assert!(text.contains("# warm key light"), "comments stay");
+    assert_eq!(text.lines().count(), original.lines().count());
+    assert_eq!(h.state().document().scene().lights[1..], scene.lights[1..]);
+
+    // And back: a directional light in the same direction.
+    pick(&mut h, "light.0.kind", "directional");
+    let isoray_scene::LightKind::Directional { direction: back } = h.state().document().scene().lights[0].kind else {
+        panic!("directional again");
+    };
+    for k in 0..3 {
+        assert!((back[k] - direction[k]).abs() < 1e-9, "{back:?} {direction:?}");
+    }
+    // A rect light gets its edges and a samples control.
+    pick(&mut h, "light.3.kind", "rect");
+    let light = &h.state().document().scene().lights[3];
+    assert!(matches!(light.kind, isoray_scene::LightKind::Rect { .. }));
+    let before = h.state().document().text().to_string();
+    set_value(&h, "light.3.samples", 64.0);
+    h.run_steps(3);
+    assert_eq!(h.state().document().text(), set(&before, &["light.3.samples=64"]));
+
+    // Undo three times: the original bytes.
+    for _ in 0..4 {
+        h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+        h.run_steps(2);
+    }
+    assert_eq!(h.state().document().text(), original);
+
+    // Materials: every value key is a control named by its key.
+    h.get_by_label("floor").click_accesskit();
+    h.run_steps(2);
+    set_value(&h, "material.floor.shininess", 64.0);
+    h.run_steps(3);
+    assert_eq!(
+        h.state().document().text(),
+        set(&original, &["material.floor.shininess=64"])
+    );
+    pick(&mut h, "material.floor.model", "phong");
+    assert_eq!(
+        h.state().document().text(),
+        set(
+            &original,
+            &["material.floor.shininess=64", "material.floor.model=phong"]
+        )
+    );
+
+    // The camera's target, by its x field.
+    h.get_by_label("Camera").click_accesskit();
+    h.run_steps(2);
+    let before = h.state().document().text().to_string();
+    set_value(&h, "camera.target.x", 0.5);
+    h.run_steps(3);
+    assert_eq!(h.state().document().scene().camera.target[0], 0.5);
+    let t = h.state().document().scene().camera.target;
+    assert_eq!(
+        h.state().document().text(),
+        set(&before, &[&format!("camera.target=[{}, {}, {}]", t[0], t[1], t[2])])
+    );
+}
+
+#[test]
+fn the_copied_camera_table_loads_back_to_the_same_camera() {
+    let scene = isoray_scene::load(&common::examples_dir().join("showcase.toml"), &[]).unwrap();
+    let mut c = scene.camera.clone();
+    c.position = [1.0 / 3.0, 2.5, -7.125];
+    c.up = [0.1, 1.0, 0.0];
+    let table = isoray_studio::app::playground::camera_toml(&c);
+    let text = format!("{table}\n[[object]]\nshape = \"sphere(p, 1.0)\"\n");
+    let back = isoray_scene::load_str(&text, "camera.toml", &[]).unwrap().camera;
+    assert_eq!(
+        (back.position, back.target, back.up, back.fov),
+        (c.position, c.target, c.up, c.fov)
+    );
+}
+
 const BASE: &str = r#"# built in the studio
 [camera]
 position = [0.0, 2.0, 5.0]
