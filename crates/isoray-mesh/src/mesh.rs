@@ -69,7 +69,43 @@ impl Topology {
     }
 }
 
+impl MeshMaterial {
+    /// A material of a diffuse colour, opaque but for `transparency`
+    /// (alpha = 1 − transparency).
+    pub fn from_diffuse(name: &str, diffuse: [f64; 3], transparency: f64) -> MeshMaterial {
+        MeshMaterial {
+            name: name.to_string(),
+            base_color: [
+                diffuse[0] as f32,
+                diffuse[1] as f32,
+                diffuse[2] as f32,
+                (1.0 - transparency).clamp(0.0, 1.0) as f32,
+            ],
+        }
+    }
+}
+
 impl Mesh {
+    /// Appends `part`'s vertices and triangles, with `material` for its
+    /// triangles (materials equal to one already listed are shared).
+    pub fn append(&mut self, part: Mesh, material: Option<MeshMaterial>) {
+        let base = self.positions.len() as u32;
+        let mat = material.map(|m| match self.materials.iter().position(|x| *x == m) {
+            Some(i) => i as u32,
+            None => {
+                self.materials.push(m);
+                (self.materials.len() - 1) as u32
+            }
+        });
+        self.positions.extend(part.positions);
+        self.normals.extend(part.normals);
+        self.triangles
+            .extend(part.triangles.iter().map(|t| t.map(|v| v + base)));
+        if let Some(m) = mat {
+            self.triangle_materials.resize(self.triangles.len(), m);
+        }
+    }
+
     /// The number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()

@@ -33,6 +33,8 @@ pub struct StudioOptions {
 enum FileDialog {
     Open(String),
     SaveAs(String),
+    /// File ▸ Export: an image (.png, .exr) or a mesh (.stl, .obj, .ply, .glb).
+    Export(String),
 }
 
 /// What to do once unsaved changes are dealt with.
@@ -61,6 +63,8 @@ pub struct Studio {
     live_vec: Option<(String, [f64; 3])>,
     /// A node's value while it is dragged in the graph.
     slot_drag: Option<SlotDrag>,
+    /// The export running, if any.
+    export: Option<crate::export::Export>,
     /// Status line: the last error or message.
     status: String,
     dialog: Option<FileDialog>,
@@ -142,6 +146,7 @@ impl Studio {
             live: None,
             live_vec: None,
             slot_drag: None,
+            export: None,
             status,
             dialog: None,
             confirm: None,
@@ -344,6 +349,17 @@ impl Studio {
                 if ui.button("Save as…").clicked() {
                     let name = self.doc.path().map_or("scene.toml".into(), |p| p.display().to_string());
                     self.dialog = Some(FileDialog::SaveAs(name));
+                }
+                if ui
+                    .add_enabled(self.export.is_none(), egui::Button::new("Export…"))
+                    .on_hover_text("the final image (.png, .exr) through the CPU renderer, or the objects as a mesh (.stl, .obj, .ply, .glb)")
+                    .clicked()
+                {
+                    let stem = self
+                        .doc
+                        .path()
+                        .map_or("scene".into(), |p| p.with_extension("").display().to_string());
+                    self.dialog = Some(FileDialog::Export(format!("{stem}.png")));
                 }
                 ui.separator();
                 if ui.button("Quit").clicked() {
@@ -726,6 +742,30 @@ impl Studio {
             if let Some(e) = self.preview.error() {
                 ui.colored_label(egui::Color32::RED, e);
             }
+            if let Some(x) = &self.export {
+                match x.end() {
+                    Some(end) => {
+                        self.status = match end {
+                            crate::export::ExportEnd::Done(s) => s,
+                            crate::export::ExportEnd::Cancelled => format!("export of {} cancelled", x.path.display()),
+                            crate::export::ExportEnd::Failed(e) => format!("export failed: {e}"),
+                        };
+                        self.export = None;
+                    }
+                    None => {
+                        let (f, stage) = x.progress();
+                        ui.add(
+                            egui::ProgressBar::new(f)
+                                .desired_width(160.0)
+                                .text(format!("export: {stage}")),
+                        );
+                        if ui.button("Cancel export").clicked() {
+                            x.cancel();
+                        }
+                        ui.ctx().request_repaint_after(std::time::Duration::from_millis(100));
+                    }
+                }
+            }
             if !self.status.is_empty() {
                 ui.label(&self.status);
             }
@@ -737,11 +777,16 @@ impl Studio {
             let (title, mut path) = match &d {
                 FileDialog::Open(p) => ("Open scene", p.clone()),
                 FileDialog::SaveAs(p) => ("Save scene as", p.clone()),
+                FileDialog::Export(p) => ("Export", p.clone()),
             };
             let mut close = false;
             let mut go = false;
             egui::Window::new(title).collapsible(false).show(ctx, |ui| {
-                ui.label("Path of the scene file:");
+                ui.label(if matches!(d, FileDialog::Export(_)) {
+                    "Path of the file: .png or .exr (the image, CPU renderer), .stl, .obj, .ply or .glb (a mesh of the bounded objects):"
+                } else {
+                    "Path of the scene file:"
+                });
                 let r = ui.text_edit_singleline(&mut path);
                 if r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
                     go = true;
@@ -754,6 +799,7 @@ impl Studio {
             self.dialog = Some(match d {
                 FileDialog::Open(_) => FileDialog::Open(path.clone()),
                 FileDialog::SaveAs(_) => FileDialog::SaveAs(path.clone()),
+                FileDialog::Export(_) => FileDialog::Export(path.clone()),
             });
             if go {
                 let p = PathBuf::from(&path);
@@ -773,6 +819,13 @@ impl Studio {
                             close = true;
                         }
                         Err(e) => self.status = e.rendered,
+                    },
+                    FileDialog::Export(_) => match crate::export::Export::start(self.doc.scene().clone(), p) {
+                        Ok(x) => {
+                            self.export = Some(x);
+                            close = true;
+                        }
+                        Err(e) => self.status = e,
                     },
                 }
             }

@@ -12,6 +12,7 @@
 
 pub mod app;
 pub mod document;
+pub mod export;
 pub mod graph;
 pub mod orbit;
 pub mod preview;

@@ -197,7 +197,7 @@ pub(crate) fn cmd_mesh(a: &MeshArgs) -> Result<(), Failure> {
             }
             Err(e) => return Err(usage(format!("{}: {e}", t.label))),
         };
-        append(&mut mesh, part, t.material.clone());
+        mesh.append(part, t.material.clone());
         summaries.push((t.label.clone(), stats));
     }
     if summaries.is_empty() {
@@ -341,34 +341,7 @@ fn stats_hint(settings: &MeshSettings, shape: &Shape) -> f64 {
 
 fn material(scene: &Scene, i: usize) -> MeshMaterial {
     let m = &scene.materials[i];
-    MeshMaterial {
-        name: m.name.clone(),
-        base_color: [
-            m.diffuse[0] as f32,
-            m.diffuse[1] as f32,
-            m.diffuse[2] as f32,
-            (1.0 - m.transparency).clamp(0.0, 1.0) as f32,
-        ],
-    }
-}
-
-/// Appends `part` to `mesh`, with `material` for its triangles.
-fn append(mesh: &mut Mesh, part: Mesh, material: Option<MeshMaterial>) {
-    let base = mesh.positions.len() as u32;
-    let mat = material.map(|m| match mesh.materials.iter().position(|x| *x == m) {
-        Some(i) => i as u32,
-        None => {
-            mesh.materials.push(m);
-            (mesh.materials.len() - 1) as u32
-        }
-    });
-    mesh.positions.extend(part.positions);
-    mesh.normals.extend(part.normals);
-    mesh.triangles
-        .extend(part.triangles.iter().map(|t| t.map(|v| v + base)));
-    if let Some(m) = mat {
-        mesh.triangle_materials.resize(mesh.triangles.len(), m);
-    }
+    MeshMaterial::from_diffuse(&m.name, m.diffuse, m.transparency)
 }
 
 fn unknown_name(path: &Path, scene: &Scene, name: &str) -> String {
