@@ -1316,12 +1316,7 @@ impl Scene {
     fn recompile(&mut self) -> Result<(), crate::SceneError> {
         let mut src = self.origin.sources.clone();
         for (name, v) in &self.params {
-            let text = match v {
-                Value::Float(x) => format!("params.{name}={x:?}"),
-                Value::Vec2([x, y]) => format!("params.{name}=[{x:?}, {y:?}]"),
-                Value::Vec3([x, y, z]) => format!("params.{name}=[{x:?}, {y:?}, {z:?}]"),
-            };
-            src.overrides.push(text);
+            src.overrides.push(format!("params.{name}={}", v.toml_text()));
         }
         let opts = crate::LoadOptions {
             time: self.time(),

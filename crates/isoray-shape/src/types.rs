@@ -108,6 +108,22 @@ pub enum Value {
 }
 
 impl Value {
+    /// The value as a scene file writes it: `0.5`, `[1.0, 2.0]`,
+    /// `[1.0, 2.0, 3.0]` (shortest exact decimals).
+    ///
+    /// ```
+    /// use isoray_shape::Value;
+    /// assert_eq!(Value::Float(0.5).toml_text(), "0.5");
+    /// assert_eq!(Value::Vec3([1.0, 0.1, 3.0]).toml_text(), "[1.0, 0.1, 3.0]");
+    /// ```
+    pub fn toml_text(&self) -> String {
+        match self {
+            Value::Float(x) => format!("{x:?}"),
+            Value::Vec2([x, y]) => format!("[{x:?}, {y:?}]"),
+            Value::Vec3([x, y, z]) => format!("[{x:?}, {y:?}, {z:?}]"),
+        }
+    }
+
     /// Its type.
     pub fn ty(&self) -> Type {
         match self {

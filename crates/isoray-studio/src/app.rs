@@ -271,7 +271,7 @@ impl Studio {
                 .iter()
                 .map(|(i, text)| crate::graph::shape_edit(*i, text))
                 .collect();
-            overrides.push(format!("params.{param}={}", value_text(v)));
+            overrides.push(format!("params.{param}={}", v.toml_text()));
             self.doc.variant(&overrides).ok()
         });
         SlotDrag {
@@ -708,7 +708,7 @@ impl Studio {
         if (response.drag_stopped() || (scroll != 0.0 && !response.dragged())) && self.orbit.is_some() {
             let o = self.orbit.take().expect("orbiting");
             let p = o.position();
-            self.edit(vec![format!("camera.position=[{}, {}, {}]", p[0], p[1], p[2])]);
+            self.edit(vec![playground::vec3_edit("camera.position", p)]);
         }
     }
 
@@ -954,14 +954,5 @@ impl Studio {
         if self.preview.busy() {
             ctx.request_repaint_after(std::time::Duration::from_millis(50));
         }
-    }
-}
-
-/// A parameter value as TOML: a number or an array of numbers.
-fn value_text(v: Value) -> String {
-    match v {
-        Value::Float(x) => format!("{x:?}"),
-        Value::Vec2([x, y]) => format!("[{x:?}, {y:?}]"),
-        Value::Vec3([x, y, z]) => format!("[{x:?}, {y:?}, {z:?}]"),
     }
 }

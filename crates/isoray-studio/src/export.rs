@@ -1,8 +1,8 @@
 //! File ▸ Export: the final image through the CPU renderer (`.png`, `.exr`)
 //! or the objects as one mesh (`.stl`, `.obj`, `.ply`, `.glb`) through
-//! isoray-mesh, on a background thread with progress and cancel. The file
-//! is written next to its destination and renamed into place, so a failed
-//! or cancelled export leaves an existing file as it was.
+//! isoray-mesh, on a background thread with progress and cancel. The writers
+//! write beside the destination and rename into place, so a failed or
+//! cancelled export leaves an existing file as it was.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -127,31 +127,16 @@ impl isoray_job::Progress for Report {
 }
 
 fn run(scene: &Scene, path: &Path, kind: ExportKind, state: &Arc<Mutex<State>>, cancel: &CancelToken) -> ExportEnd {
-    // The temporary file keeps the extension: the writers choose by it.
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
-    let partial = path.with_file_name(format!(
-        ".{name}.partial.{}",
-        path.extension().unwrap_or_default().to_string_lossy()
-    ));
+    // The writers are atomic (a temporary file beside the target, renamed
+    // over it when complete; an OBJ's `.mtl` with it), so an export that
+    // fails or is cancelled leaves the old file and no leftovers.
     let result = match kind {
-        ExportKind::Image => image(scene, &partial, state, cancel),
-        ExportKind::Mesh => mesh(scene, &partial, state, cancel),
+        ExportKind::Image => image(scene, path, state, cancel),
+        ExportKind::Mesh => mesh(scene, path, state, cancel),
     };
     match result {
-        Ok(summary) => match std::fs::rename(&partial, path) {
-            Ok(()) => ExportEnd::Done(format!("exported {}: {summary}", path.display())),
-            Err(e) => {
-                let _ = std::fs::remove_file(&partial);
-                ExportEnd::Failed(format!("could not write {}: {e}", path.display()))
-            }
-        },
-        Err(end) => {
-            let _ = std::fs::remove_file(&partial);
-            end
-        }
+        Ok(summary) => ExportEnd::Done(format!("exported {}: {summary}", path.display())),
+        Err(end) => end,
     }
 }
 

@@ -148,7 +148,7 @@ impl Studio {
         let held = ui.input(|i| i.pointer.any_down());
         if !changed && !held && self.live_vec.as_ref().is_some_and(|(k, _)| k == key) {
             let (_, v) = self.live_vec.take().expect("checked");
-            self.edit(vec![format!("{key}=[{}, {}, {}]", v[0], v[1], v[2])]);
+            self.edit(vec![vec3_edit(key, v)]);
         }
     }
 
@@ -175,7 +175,7 @@ impl Studio {
         let released = |r: &egui::Response| r.drag_stopped() || (r.changed() && !r.dragged());
         if released(&a) || released(&e) {
             if let Some((_, v)) = self.live_vec.take() {
-                self.edit(vec![format!("{key}=[{}, {}, {}]", v[0], v[1], v[2])]);
+                self.edit(vec![vec3_edit(key, v)]);
             }
         }
     }
@@ -204,7 +204,7 @@ impl Studio {
         }
         if done {
             if let Some((_, v)) = self.live_vec.take() {
-                self.edit(vec![format!("{key}=[{}, {}, {}]", v[0], v[1], v[2])]);
+                self.edit(vec![vec3_edit(key, v)]);
             }
         }
     }
@@ -530,4 +530,10 @@ fn choice<T: Named + std::fmt::Debug>(ui: &mut egui::Ui, label: &str, value: &mu
 /// The file's name of a choice's value.
 fn name_of<T: Named>(value: T) -> &'static str {
     T::NAMES.iter().find(|(_, v)| *v == value).map_or("?", |(n, _)| n)
+}
+
+/// The edit (`--set` syntax) that sets the three-component `key` to `v`.
+pub(crate) fn vec3_edit<T: std::fmt::Display>(key: &str, v: [T; 3]) -> String {
+    let [x, y, z] = v;
+    format!("{key}=[{x}, {y}, {z}]")
 }

@@ -169,7 +169,7 @@ impl GraphEditor {
     /// instead of its text: (object index, shape text) for every object
     /// whose shape that changes. The graph is left as it was.
     pub fn shapes_with_slot(&mut self, node: NodeId, input: usize, name: &str) -> Vec<(usize, String)> {
-        let before = self.check();
+        let before = self.texts();
         let Some(GraphNode::Op { slots, .. }) = self.snarl.get_node_mut(node) else {
             return Vec::new();
         };
@@ -177,11 +177,10 @@ impl GraphEditor {
             return Vec::new();
         };
         let kept = std::mem::replace(slot, name.to_string());
-        let after = self.check();
+        let after = self.texts();
         if let Some(GraphNode::Op { slots, .. }) = self.snarl.get_node_mut(node) {
             slots[input] = kept;
         }
-        self.check();
         before
             .into_iter()
             .zip(after)
@@ -190,6 +189,15 @@ impl GraphEditor {
                 (Some(b), Some(a)) if a != b => Some((i, a)),
                 _ => None,
             })
+            .collect()
+    }
+
+    /// Each object's printed shape text (`None` where it does not print),
+    /// leaving the nodes' errors alone.
+    fn texts(&self) -> Vec<Option<String>> {
+        self.objects
+            .iter()
+            .map(|&o| model::object_text(&self.snarl, o, &self.names).ok())
             .collect()
     }
 }
