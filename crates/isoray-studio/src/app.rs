@@ -14,7 +14,7 @@ use crate::document::Document;
 use crate::graph::GraphEditor;
 use crate::orbit::Orbit;
 use crate::preview::{Frame, Preview};
-use crate::surfaces::{candidate, Check, Field, FieldError, Mode, Outcome, SurfaceForm};
+use crate::surfaces::{candidate, Check, Field, FieldError, Mode, Outcome, ParamRow, SurfaceForm};
 
 /// How the studio was started.
 #[derive(Debug, Clone, Default)]
@@ -86,6 +86,8 @@ pub struct Studio {
     surfaces_tab: bool,
     /// The surface dialog, when open: its fields and the check of them.
     surface_dialog: Option<(SurfaceForm, Option<Check>)>,
+    /// The dialog's preview texture and the candidate text it shows.
+    surface_preview: Option<(String, egui::TextureHandle)>,
 }
 
 /// A node value being dragged in the graph. The preview shows the scene
@@ -160,6 +162,7 @@ impl Studio {
             show_graph: true,
             surfaces_tab: false,
             surface_dialog: None,
+            surface_preview: None,
         }
     }
 
@@ -555,11 +558,30 @@ impl Studio {
                     text.clone(),
                     file,
                     form.name.trim().to_string(),
+                    Some(self.doc.analyses()),
                     move || wake.request_repaint(),
                 ));
             }
         }
-        let (progress, outcome) = check.as_ref().map_or((0.0, None), |c| c.status());
+        let status = check.as_ref().map(|c| c.status()).unwrap_or_default();
+        let (progress, outcome) = (status.progress, status.outcome.clone());
+        let preview = match (&check, &status.preview) {
+            (Some(c), Some(rgba)) => {
+                if self.surface_preview.as_ref().is_none_or(|(t, _)| t != &c.text) {
+                    let [w, h] = crate::surfaces::PREVIEW;
+                    let image = egui::ColorImage::from_rgba_unmultiplied([w as usize, h as usize], rgba);
+                    let tex = ctx.load_texture("surface preview", image, egui::TextureOptions::LINEAR);
+                    self.surface_preview = Some((c.text.clone(), tex));
+                }
+                self.surface_preview.as_ref().map(|(_, t)| t.clone())
+            }
+            _ => None,
+        };
+        let renames = form
+            .original
+            .as_deref()
+            .filter(|o| *o != form.name.trim())
+            .map_or(0, |o| crate::surfaces::calls_of(self.doc.text(), o));
         let error: Option<FieldError> = match (&prepared, &outcome) {
             (Err(e), _) => Some(e.clone()),
             (Ok(_), Some(Outcome::Invalid(e))) => Some(e.clone()),
@@ -583,6 +605,12 @@ impl Studio {
                     ui.text_edit_singleline(&mut form.name);
                 });
                 at(Field::Name, ui);
+                if renames > 0 {
+                    ui.weak(format!(
+                        "saving renames {renames} call{} in the objects and surfaces",
+                        if renames == 1 { "" } else { "s" }
+                    ));
+                }
                 ui.horizontal(|ui| {
                     ui.selectable_value(&mut form.mode, Mode::Sdf, "SDF");
                     ui.selectable_value(&mut form.mode, Mode::Implicit, "Implicit");
@@ -608,12 +636,26 @@ impl Studio {
                         }
                     }
                 }
-                ui.horizontal(|ui| {
-                    ui.label("parameters");
-                    ui.text_edit_singleline(&mut form.params)
-                        .on_hover_text("{ r = 1.0, k = { default = 0.5, range = [0.0, 1.0] } }");
-                });
+                params_grid(ui, &mut form.params, error.as_ref());
                 at(Field::Params, ui);
+                if form.mode == Mode::Parametric {
+                    for (i, v) in ["s", "t"].iter().enumerate() {
+                        ui.horizontal(|ui| {
+                            ui.label(format!("domain of {v}"));
+                            for (j, hint) in ["-1.0", "1.0"].iter().enumerate() {
+                                ui.add(
+                                    egui::TextEdit::singleline(&mut form.domain[i][j])
+                                        .hint_text(*hint)
+                                        .desired_width(56.0),
+                                );
+                            }
+                        });
+                        at(Field::Domain(i), ui);
+                    }
+                    ui.checkbox(&mut form.image_only, "image only")
+                        .on_hover_text("keep only the points with a real preimage in the domain");
+                    at(Field::ImageOnly, ui);
+                }
                 if form.mode != Mode::Sdf {
                     egui::ComboBox::from_label("bound")
                         .selected_text(if form.bound.is_empty() {
@@ -631,6 +673,16 @@ impl Studio {
                             }
                         });
                     at(Field::Bound, ui);
+                    ui.horizontal(|ui| {
+                        ui.label("lipschitz factor");
+                        ui.add(
+                            egui::TextEdit::singleline(&mut form.lipschitz_factor)
+                                .hint_text("1.0")
+                                .desired_width(56.0),
+                        )
+                        .on_hover_text("the traced distance is divided by it (≥ 1)");
+                    });
+                    at(Field::LipschitzFactor, ui);
                 }
                 at(Field::Other, ui);
                 ui.separator();
@@ -648,6 +700,20 @@ impl Studio {
                     }
                     Some(Outcome::Valid(d)) => {
                         ui.label(egui::RichText::new(d).monospace().small());
+                        match &preview {
+                            Some(tex) => {
+                                let [w, h] = crate::surfaces::PREVIEW;
+                                ui.image((tex.id(), egui::vec2(w as f32, h as f32)))
+                                    .on_hover_text("the surface alone, through the scene's camera and lights");
+                            }
+                            None if !status.finished => {
+                                ui.horizontal(|ui| {
+                                    ui.spinner();
+                                    ui.label("rendering the surface…");
+                                });
+                            }
+                            None => {}
+                        }
                     }
                     Some(Outcome::Cancelled) => {
                         ui.label("check cancelled: edit a field to check again");
@@ -954,5 +1020,70 @@ impl Studio {
         if self.preview.busy() {
             ctx.request_repaint_after(std::time::Duration::from_millis(50));
         }
+    }
+}
+
+/// The surface dialog's grid of parameters: symbol, default and slider
+/// range per row, in call order (move a row up or down, remove it, add
+/// one); a row with an error is marked and the message follows the grid.
+fn params_grid(ui: &mut egui::Ui, params: &mut Vec<ParamRow>, error: Option<&FieldError>) {
+    ui.label("parameters (in call order, after the point)");
+    let mut action = None;
+    egui::Grid::new("surface parameters").num_columns(5).show(ui, |ui| {
+        for h in ["symbol", "default", "min", "max", ""] {
+            ui.weak(h);
+        }
+        ui.end_row();
+        let n = params.len();
+        for (i, row) in params.iter_mut().enumerate() {
+            let bad = error.is_some_and(|e| e.field == Field::Param(i));
+            let edit = |ui: &mut egui::Ui, text: &mut String, hint: &str, width: f32, label: String| {
+                let mut t = egui::TextEdit::singleline(text).hint_text(hint).desired_width(width);
+                if bad {
+                    t = t.text_color(egui::Color32::from_rgb(0xe0, 0x60, 0x50));
+                }
+                let r = ui.add(t);
+                r.widget_info(|| egui::WidgetInfo::labeled(egui::WidgetType::TextEdit, true, &label));
+            };
+            edit(ui, &mut row.name, "name", 56.0, format!("parameter {} symbol", i + 1));
+            edit(
+                ui,
+                &mut row.default,
+                "1.0 or 0, 1, 0",
+                96.0,
+                format!("parameter {} default", i + 1),
+            );
+            edit(ui, &mut row.min, "", 48.0, format!("parameter {} min", i + 1));
+            edit(ui, &mut row.max, "", 48.0, format!("parameter {} max", i + 1));
+            ui.horizontal(|ui| {
+                if ui.add_enabled(i > 0, egui::Button::new("↑").small()).clicked() {
+                    action = Some((i, -1));
+                }
+                if ui.add_enabled(i + 1 < n, egui::Button::new("↓").small()).clicked() {
+                    action = Some((i, 1));
+                }
+                if ui.small_button("✕").on_hover_text("remove the parameter").clicked() {
+                    action = Some((i, 0));
+                }
+            });
+            ui.end_row();
+        }
+    });
+    match action {
+        Some((i, 0)) => {
+            params.remove(i);
+        }
+        Some((i, d)) => params.swap(i, (i as isize + d) as usize),
+        None => {}
+    }
+    if ui.small_button("Add parameter").clicked() {
+        params.push(ParamRow {
+            name: format!("a{}", params.len() + 1),
+            default: "1.0".into(),
+            ..ParamRow::default()
+        });
+    }
+    if let Some(e) = error.filter(|e| matches!(e.field, Field::Param(_))) {
+        ui.colored_label(egui::Color32::from_rgb(0xe0, 0x60, 0x50), &e.message);
     }
 }

@@ -309,6 +309,12 @@ impl Document {
         load_with(&self.text, self.path.as_deref(), &self.caches, overrides)
     }
 
+    /// The implicitizations this document's loads share (a handle: loads
+    /// through it fill the same cache).
+    pub fn analyses(&self) -> isoray_shape::Analyses {
+        self.caches.analyses.clone()
+    }
+
     /// Loads the scene again after undo or redo (texts on the stacks all
     /// loaded once; a file they name may have gone since, and then the
     /// scene stays as it was).

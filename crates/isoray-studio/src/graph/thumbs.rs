@@ -143,11 +143,19 @@ fn work(rx: &Receiver<Job>, done: &Done, ctx: &egui::Context) {
 }
 
 /// The scene of `scene_text` (read as the file `name`) with `shape` as
-/// its only object (with the first object's material), small, with one
-/// sample per pixel.
-pub fn thumbnail_scene(scene_text: &str, name: &str, shape: &str) -> Option<isoray_scene::Scene> {
+/// its only object (with the first object's material when `material`),
+/// at `size` pixels, with one sample per pixel; `analyses` is a cache of
+/// implicitizations to reuse.
+pub fn scene_of_shape(
+    scene_text: &str,
+    name: &str,
+    shape: &str,
+    size: [u32; 2],
+    material: bool,
+    analyses: Option<isoray_shape::Analyses>,
+) -> Option<isoray_scene::Scene> {
     let mut doc: toml_edit::DocumentMut = scene_text.parse().ok()?;
-    let material = doc
+    let first = doc
         .get("object")
         .and_then(|o| o.as_array_of_tables())
         .and_then(|a| a.get(0))
@@ -156,18 +164,28 @@ pub fn thumbnail_scene(scene_text: &str, name: &str, shape: &str) -> Option<isor
         .map(str::to_string);
     let mut object = toml_edit::Table::new();
     object.insert("shape", toml_edit::value(shape));
-    if let Some(m) = material {
+    if let Some(m) = first.filter(|_| material) {
         object.insert("material", toml_edit::value(m));
     }
     let mut list = toml_edit::ArrayOfTables::new();
     list.push(object);
     doc.insert("object", toml_edit::Item::ArrayOfTables(list));
     let overrides = [
-        format!("render.width={}", SIZE[0]),
-        format!("render.height={}", SIZE[1]),
+        format!("render.width={}", size[0]),
+        format!("render.height={}", size[1]),
         "render.aa=1".to_string(),
     ];
-    isoray_scene::load_str(&doc.to_string(), name, &overrides).ok()
+    let options = isoray_scene::LoadOptions {
+        analyses,
+        ..Default::default()
+    };
+    isoray_scene::load_str_with(&doc.to_string(), name, &overrides, &options).ok()
+}
+
+/// A node's thumbnail scene: [`scene_of_shape`] at [`SIZE`] with the first
+/// object's material.
+pub fn thumbnail_scene(scene_text: &str, name: &str, shape: &str) -> Option<isoray_scene::Scene> {
+    scene_of_shape(scene_text, name, shape, SIZE, true, None)
 }
 
 fn render(scene_text: &str, name: &str, shape: &str) -> Option<Vec<u8>> {
