@@ -1056,13 +1056,17 @@ fn params_grid(ui: &mut egui::Ui, params: &mut Vec<ParamRow>, error: Option<&Fie
             edit(ui, &mut row.min, "", 48.0, format!("parameter {} min", i + 1));
             edit(ui, &mut row.max, "", 48.0, format!("parameter {} max", i + 1));
             ui.horizontal(|ui| {
-                if ui.add_enabled(i > 0, egui::Button::new("↑").small()).clicked() {
+                if ui.add_enabled(i > 0, egui::Button::new("up").small()).clicked() {
                     action = Some((i, -1));
                 }
-                if ui.add_enabled(i + 1 < n, egui::Button::new("↓").small()).clicked() {
+                if ui.add_enabled(i + 1 < n, egui::Button::new("down").small()).clicked() {
                     action = Some((i, 1));
                 }
-                if ui.small_button("✕").on_hover_text("remove the parameter").clicked() {
+                if ui
+                    .small_button("remove")
+                    .on_hover_text("remove the parameter")
+                    .clicked()
+                {
                     action = Some((i, 0));
                 }
             });

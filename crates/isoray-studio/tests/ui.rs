@@ -492,3 +492,19 @@ fn the_surfaces_tab_lists_the_scene_surfaces_and_opens_one_in_the_dialog() {
     // ... and saving an unchanged surface changes nothing.
     assert_eq!(h.state().document().text(), original);
 }
+
+#[test]
+#[ignore = "writes a picture of the surface dialog to $ISORAY_SHOT for a person to look at"]
+fn picture_of_the_surface_dialog() {
+    let (_dir, path, _) = example_copy("surfaces.toml");
+    let mut h = studio_sized(&path, egui::Vec2::new(1400.0, 900.0));
+    h.get_by_label("Surfaces").click();
+    h.run_steps(2);
+    h.get_all_by_label("Edit").nth(1).unwrap().click();
+    for _ in 0..400 {
+        h.run_steps(1);
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let img = h.render().unwrap();
+    img.save(std::env::var("ISORAY_SHOT").unwrap()).unwrap();
+}
