@@ -166,7 +166,6 @@ fn bare_text(v: &toml_edit::Value) -> String {
 fn number_text(v: &toml_edit::Value) -> String {
     match v {
         toml_edit::Value::Integer(i) => format!("{}.0", i.value()),
-        toml_edit::Value::Float(_) => bare_text(v),
         other => bare_text(other),
     }
 }
@@ -612,8 +611,8 @@ pub fn field_at(text: &str, name: &str, at: usize) -> Field {
     else {
         return Field::Other;
     };
-    let contains = |item: &toml_edit::Item| item.span().is_some_and(|s| s.start <= at && at <= s.end);
     let inside = |s: Option<std::ops::Range<usize>>| s.is_some_and(|s| s.start <= at && at <= s.end);
+    let contains = |item: &toml_edit::Item| inside(item.span());
     // The entry of an inline table whose key or value contains `at`.
     let entry = |item: &toml_edit::Item| {
         let c = item.as_table_like()?;

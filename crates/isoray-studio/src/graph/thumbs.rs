@@ -182,14 +182,9 @@ pub fn scene_of_shape(
     isoray_scene::load_str_with(&doc.to_string(), name, &overrides, &options).ok()
 }
 
-/// A node's thumbnail scene: [`scene_of_shape`] at [`SIZE`] with the first
-/// object's material.
-pub fn thumbnail_scene(scene_text: &str, name: &str, shape: &str) -> Option<isoray_scene::Scene> {
-    scene_of_shape(scene_text, name, shape, SIZE, true, None)
-}
-
 fn render(scene_text: &str, name: &str, shape: &str) -> Option<Vec<u8>> {
-    let scene = thumbnail_scene(scene_text, name, shape)?;
+    // A node's thumbnail: in the first object's material.
+    let scene = scene_of_shape(scene_text, name, shape, SIZE, true, None)?;
     let (img, _) = isoray_render::render(&scene, &RenderOptions::default());
     Some(crate::preview::rgba(&img.color))
 }
