@@ -324,3 +324,23 @@ fn the_preview_shows_the_surface_alone() {
     let check = Check::start(text, "scene.toml".into(), bad.name.clone(), None, || {});
     assert!(check.wait_preview().is_none());
 }
+
+#[test]
+fn a_slow_implicitization_can_be_cancelled() {
+    // Distinct denominators in each coordinate: seconds of elimination.
+    let slow = r#"[surface.slow]
+parametric = { x = "(s+t^2)/(t+1)", y = "(s^2-t)/(s+2)", z = "(s*t)/(s-t+1)" }
+domain = { s = [-0.5, 0.5], t = [-0.5, 0.5] }
+
+[[object]]
+shape = "slow(p)"
+"#;
+    let check = Check::start(slow.into(), "scene.toml".into(), "slow".into(), None, || {});
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    assert!(check.status().outcome.is_none(), "still running after 0.3 s");
+    let asked = std::time::Instant::now();
+    check.cancel();
+    assert!(matches!(check.wait(), Outcome::Cancelled));
+    let took = asked.elapsed();
+    assert!(took.as_secs_f64() < 2.0, "cancelled in {took:?}");
+}

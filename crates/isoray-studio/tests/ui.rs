@@ -6,7 +6,7 @@
 //! `isoray render` of the saved file is byte-identical to rendering a
 //! reference scene file written by hand.
 
-use egui_kittest::kittest::Queryable;
+use egui_kittest::kittest::{NodeT, Queryable};
 use egui_kittest::Harness;
 use isoray_studio::graph::GraphNode;
 use isoray_studio::{Studio, StudioOptions};
@@ -496,15 +496,78 @@ fn the_surfaces_tab_lists_the_scene_surfaces_and_opens_one_in_the_dialog() {
 #[test]
 #[ignore = "writes a picture of the surface dialog to $ISORAY_SHOT for a person to look at"]
 fn picture_of_the_surface_dialog() {
+    // $ISORAY_SHOT_SCENE is the scene (examples/surfaces.toml when unset),
+    // $ISORAY_SHOT_ROW picks the surface (1 = the first), $ISORAY_SHOT_MS
+    // how long the check runs before the picture.
+    let row = std::env::var("ISORAY_SHOT_ROW").map_or(1, |s| s.parse().unwrap());
+    let ms = std::env::var("ISORAY_SHOT_MS").map_or(4000, |s| s.parse().unwrap());
     let (_dir, path, _) = example_copy("surfaces.toml");
+    let path = std::env::var("ISORAY_SHOT_SCENE").map_or(path, std::path::PathBuf::from);
     let mut h = studio_sized(&path, egui::Vec2::new(1400.0, 900.0));
     h.get_by_label("Surfaces").click();
     h.run_steps(2);
-    h.get_all_by_label("Edit").nth(1).unwrap().click();
-    for _ in 0..400 {
+    h.get_all_by_label("Edit").nth(row).unwrap().click();
+    settle(&mut h, ms);
+    let img = h.render().unwrap();
+    img.save(std::env::var("ISORAY_SHOT").unwrap()).unwrap();
+}
+
+/// Runs the harness for about `ms` milliseconds of wall time, so the
+/// dialog's background check can finish.
+fn settle(h: &mut Harness<'_, Studio>, ms: u64) {
+    for _ in 0..ms / 10 {
         h.run_steps(1);
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
-    let img = h.render().unwrap();
-    img.save(std::env::var("ISORAY_SHOT").unwrap()).unwrap();
+}
+
+/// Replaces the whole text of the field labelled `label` with `text`.
+fn retype(h: &mut Harness<'_, Studio>, label: &str, text: &str) {
+    h.get_by_label(label).focus();
+    h.run_steps(2);
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.run_steps(1);
+    h.get_by_label(label).type_text(text);
+    h.run_steps(2);
+}
+
+#[test]
+fn a_parameter_default_typed_into_the_grid_is_checked_and_saved_as_its_key() {
+    let (_dir, path, original) = example_copy("surfaces.toml");
+    let mut h = studio_sized(&path, egui::Vec2::new(1400.0, 900.0));
+    h.get_by_label("Surfaces").click();
+    h.run_steps(2);
+    // sphere_eq, the first surface: params = { r = 0.9 }.
+    h.get_all_by_label("Edit").nth(1).unwrap().click();
+    settle(&mut h, 1500);
+    assert_eq!(h.get_by_label("parameter 1 symbol").value().as_deref(), Some("r"));
+    assert_eq!(h.get_by_label("parameter 1 default").value().as_deref(), Some("0.9"));
+
+    // Not a number: the check fails at the row and Save stays disabled.
+    retype(&mut h, "parameter 1 default", "0.7x");
+    settle(&mut h, 1500);
+    assert!(
+        h.get_by_label("Save").accesskit_node().is_disabled(),
+        "a bad default cannot be saved"
+    );
+    h.get_by_label("Save").click();
+    h.run_steps(2);
+    assert_eq!(h.state().document().text(), original, "nothing was written");
+
+    // A number: the check passes and Save writes exactly that key.
+    retype(&mut h, "parameter 1 default", "0.7");
+    settle(&mut h, 1500);
+    assert!(!h.get_by_label("Save").accesskit_node().is_disabled());
+    h.get_by_label("Save").click();
+    h.run_steps(3);
+    assert!(h.query_by_label("Save").is_none(), "the dialog closed");
+    assert_eq!(
+        h.state().document().text(),
+        set(&original, &["surface.sphere_eq.params.r=0.7"]),
+        "the save is the edit `isoray set` would make"
+    );
+    // One undo step returns the file.
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().document().text(), original);
 }
