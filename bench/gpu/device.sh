@@ -44,3 +44,5 @@ row Primitives 1 3840x2160 examples/realtime/primitives.toml
 row showcase - 960x540 examples/showcase.toml
 row showcase - 1920x1080 examples/showcase.toml
 "$F" examples/realtime/primitives.toml --size 1280x720 --frames 10 --warmup 2 --latency | grep latency
+# The studio's latencies on this GPU (the same measures as on lavapipe).
+bash bench/studio/latency.sh

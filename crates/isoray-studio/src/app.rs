@@ -37,6 +37,24 @@ enum FileDialog {
     Export(String),
 }
 
+/// The preview frame on screen (for tests and benchmarks).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shown {
+    /// The request it answers (see [`Studio::wanted`]).
+    pub id: u64,
+    /// True when it is the request's final image (not a partial pass).
+    pub done: bool,
+    /// How long the renderer took for it, ms.
+    pub ms: f64,
+    /// Its size in pixels (smaller than the panel while dragging when a
+    /// full frame is slow).
+    pub width: u32,
+    /// Its size in pixels.
+    pub height: u32,
+    /// When the UI put it on screen.
+    pub at: Instant,
+}
+
 /// What to do once unsaved changes are dealt with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Pending {
@@ -50,8 +68,8 @@ pub struct Studio {
     preview: Preview,
     options: StudioOptions,
     texture: Option<egui::TextureHandle>,
-    /// The last frame shown: its request and whether it was final.
-    shown: Option<(u64, bool, f64)>,
+    /// The last frame shown.
+    shown: Option<Shown>,
     /// The request that answers the document as it is now.
     wanted: u64,
     /// The camera while the user drags it (committed on release).
@@ -72,6 +90,8 @@ pub struct Studio {
     allow_close: bool,
     screenshot_asked: bool,
     started: Instant,
+    /// The preview panel on screen, in points.
+    preview_rect: egui::Rect,
     /// Preview size (pixels of the central panel, scaled).
     preview_size: (u32, u32),
     /// How long the last full-resolution frame took, ms.
@@ -155,6 +175,7 @@ impl Studio {
             allow_close: false,
             screenshot_asked: false,
             started: Instant::now(),
+            preview_rect: egui::Rect::NOTHING,
             preview_size: (0, 0),
             full_frame_ms: 0.0,
             reduced: Default::default(),
@@ -169,6 +190,29 @@ impl Studio {
     /// The document (for tests).
     pub fn document(&self) -> &Document {
         &self.doc
+    }
+
+    /// The preview frame on screen, if any (for tests and benchmarks).
+    pub fn shown(&self) -> Option<Shown> {
+        self.shown
+    }
+
+    /// The id of the preview request that answers the document and the
+    /// drag in progress as they are now: the preview has caught up when
+    /// [`Studio::shown`] answers it.
+    pub fn wanted(&self) -> u64 {
+        self.wanted
+    }
+
+    /// Which renderer draws the preview (None until it has started).
+    pub fn backend(&self) -> Option<crate::preview::Backend> {
+        self.preview.backend()
+    }
+
+    /// The preview panel's rectangle on screen, in points (for tests and
+    /// benchmarks that drag in it).
+    pub fn preview_rect(&self) -> egui::Rect {
+        self.preview_rect
     }
 
     /// The graph panel's state (for tests).
@@ -751,6 +795,7 @@ impl Studio {
             self.show(ui.ctx(), f);
         }
         let (rect, response) = ui.allocate_exact_size(avail, egui::Sense::drag());
+        self.preview_rect = rect;
         if let Some(t) = &self.texture {
             ui.painter().image(
                 t.id(),
@@ -767,9 +812,13 @@ impl Studio {
         if response.dragged() || scroll != 0.0 {
             let o = self.orbit.get_or_insert_with(|| Orbit::of(&self.doc.scene().camera));
             let d = response.drag_delta();
-            o.rotate(-d.x as f64 * 0.01, d.y as f64 * 0.01);
-            o.zoom((-scroll as f64 * 0.002).exp());
-            self.request_preview();
+            // A pointer held still asks for nothing new (a request would
+            // cancel the frame being drawn for the same camera).
+            if d != egui::Vec2::ZERO || scroll != 0.0 {
+                o.rotate(-d.x as f64 * 0.01, d.y as f64 * 0.01);
+                o.zoom((-scroll as f64 * 0.002).exp());
+                self.request_preview();
+            }
         }
         if (response.drag_stopped() || (scroll != 0.0 && !response.dragged())) && self.orbit.is_some() {
             let o = self.orbit.take().expect("orbiting");
@@ -787,7 +836,14 @@ impl Studio {
         if f.done && !self.reduced.remove(&f.id) {
             self.full_frame_ms = f.ms;
         }
-        self.shown = Some((f.id, f.done, f.ms));
+        self.shown = Some(Shown {
+            id: f.id,
+            done: f.done,
+            ms: f.ms,
+            width: f.width,
+            height: f.height,
+            at: Instant::now(),
+        });
     }
 
     fn status_bar(&mut self, ui: &mut egui::Ui) {
@@ -795,7 +851,7 @@ impl Studio {
             if let Some(b) = self.preview.backend() {
                 ui.label(b.describe());
             }
-            if let Some((id, done, ms)) = self.shown {
+            if let Some(Shown { id, done, ms, .. }) = self.shown {
                 let state = if id != self.wanted || self.preview.busy() {
                     "rendering…"
                 } else if done {
@@ -947,7 +1003,7 @@ impl Studio {
         let Some(out) = self.options.screenshot.clone() else {
             return;
         };
-        let converged = self.shown.is_some_and(|(id, done, _)| id == self.wanted && done)
+        let converged = self.shown.is_some_and(|f| f.id == self.wanted && f.done)
             && !self.preview.busy()
             && (!self.show_graph || self.graph.thumbs.pending() == 0);
         let failed = self.preview.error().is_some() || self.started.elapsed().as_secs() > 600;

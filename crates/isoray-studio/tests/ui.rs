@@ -571,3 +571,28 @@ fn a_parameter_default_typed_into_the_grid_is_checked_and_saved_as_its_key() {
     h.run_steps(2);
     assert_eq!(h.state().document().text(), original);
 }
+
+#[test]
+fn an_orbit_asks_for_a_frame_per_move_and_none_while_the_pointer_is_still() {
+    let (_dir, path, original) = example_copy("showcase.toml");
+    let mut h = studio_on(&path);
+    h.run_steps(3);
+    let c = h.state().preview_rect().center();
+    h.hover_at(c);
+    h.run_steps(1);
+    h.drag_at(c);
+    h.run_steps(1);
+    h.hover_at(c + egui::vec2(10.0, 0.0));
+    h.run_steps(1);
+    let moved = h.state().wanted();
+    // Held still: no new request would cancel the frame being drawn.
+    h.run_steps(5);
+    assert_eq!(h.state().wanted(), moved);
+    h.hover_at(c + egui::vec2(20.0, 0.0));
+    h.run_steps(1);
+    assert_eq!(h.state().wanted(), moved + 1, "one request per move");
+    assert_eq!(h.state().document().text(), original, "nothing written while dragging");
+    h.drop_at(c + egui::vec2(20.0, 0.0));
+    h.run_steps(2);
+    assert_ne!(h.state().document().text(), original, "the release writes the camera");
+}
