@@ -55,6 +55,68 @@ pub struct Shown {
     pub at: Instant,
 }
 
+/// The navigation keys held over the preview this frame: arrows orbit
+/// (pan with Shift), + and − or Page Up and Page Down zoom. Each frame a
+/// key is held turns, pans or zooms by its rate times the frame's time.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct NavKeys {
+    /// Right minus left, up minus down (−1, 0 or 1).
+    x: f64,
+    y: f64,
+    /// Out minus in.
+    zoom: f64,
+    /// Shift held: the arrows pan.
+    pan: bool,
+    /// The frame's time, seconds.
+    dt: f64,
+    /// Any navigation key is down.
+    held: bool,
+}
+
+impl NavKeys {
+    /// Radians a second an arrow key turns the orbit.
+    const TURN: f64 = 1.5;
+    /// Distances to the target a second an arrow key pans.
+    const PAN: f64 = 0.5;
+    /// Doublings of the distance a second the zoom keys make.
+    const ZOOM: f64 = 1.0;
+
+    fn read(i: &egui::InputState) -> NavKeys {
+        use egui::Key;
+        let down = |k: Key| if i.key_down(k) { 1.0 } else { 0.0 };
+        let x = down(Key::ArrowRight) - down(Key::ArrowLeft);
+        let y = down(Key::ArrowUp) - down(Key::ArrowDown);
+        let zoom = down(Key::Minus) + down(Key::PageDown) - down(Key::Plus) - down(Key::Equals) - down(Key::PageUp);
+        NavKeys {
+            x,
+            y,
+            zoom,
+            pan: i.modifiers.shift,
+            // A long stall (a slow frame) moves no further than 1/10 s.
+            dt: (i.stable_dt as f64).clamp(0.0, 0.1),
+            held: x != 0.0 || y != 0.0 || zoom != 0.0,
+        }
+    }
+
+    fn any(&self) -> bool {
+        self.held
+    }
+
+    fn apply(&self, o: &mut Orbit) {
+        if !self.held {
+            return;
+        }
+        // A key moves the view as a drag the same way would: the scene
+        // follows the arrow.
+        if self.pan {
+            o.pan(-self.x * Self::PAN * self.dt, -self.y * Self::PAN * self.dt);
+        } else {
+            o.rotate(-self.x * Self::TURN * self.dt, -self.y * Self::TURN * self.dt);
+        }
+        o.zoom((self.zoom * Self::ZOOM * self.dt).exp2());
+    }
+}
+
 /// What to do once unsaved changes are dealt with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Pending {
@@ -782,7 +844,9 @@ impl Studio {
     }
 
     /// The preview: the latest frame, scaled to the panel; drag to orbit,
-    /// scroll to zoom.
+    /// right- or middle-drag (or Shift-drag) to pan, scroll to zoom; with
+    /// the preview clicked or hovered, the arrow keys orbit (Shift: pan)
+    /// and + / − zoom. The camera is written to the file on release.
     fn preview_panel(&mut self, ui: &mut egui::Ui) {
         let avail = ui.available_size();
         let ppp = ui.ctx().pixels_per_point();
@@ -794,7 +858,7 @@ impl Studio {
         if let Some(f) = self.preview.take_frame() {
             self.show(ui.ctx(), f);
         }
-        let (rect, response) = ui.allocate_exact_size(avail, egui::Sense::drag());
+        let (rect, response) = ui.allocate_exact_size(avail, egui::Sense::click_and_drag());
         self.preview_rect = rect;
         if let Some(t) = &self.texture {
             ui.painter().image(
@@ -804,26 +868,64 @@ impl Studio {
                 egui::Color32::WHITE,
             );
         }
+        if response.clicked() || response.drag_started() {
+            // Keys navigate the preview once it has been clicked.
+            response.request_focus();
+        }
+        if response.has_focus() {
+            // The arrows are ours, not egui's focus moves.
+            let filter = egui::EventFilter {
+                horizontal_arrows: true,
+                vertical_arrows: true,
+                ..Default::default()
+            };
+            ui.memory_mut(|m| m.set_focus_lock_filter(response.id, filter));
+        }
         let scroll = if response.hovered() {
             ui.input(|i| i.smooth_scroll_delta.y)
         } else {
             0.0
         };
-        if response.dragged() || scroll != 0.0 {
+        let keys = if response.has_focus() || (response.hovered() && !ui.ctx().egui_wants_keyboard_input()) {
+            ui.input(NavKeys::read)
+        } else {
+            NavKeys::default()
+        };
+        let d = response.drag_delta();
+        let moved = d != egui::Vec2::ZERO || scroll != 0.0 || keys.any();
+        if moved {
             let o = self.orbit.get_or_insert_with(|| Orbit::of(&self.doc.scene().camera));
-            let d = response.drag_delta();
+            // Primary drag orbits; the secondary or middle button, or Shift
+            // with the primary, pans; the wheel zooms. Arrow keys orbit
+            // (with Shift they pan), + and − (or Page Up/Down) zoom.
+            let panning = response.dragged_by(egui::PointerButton::Secondary)
+                || response.dragged_by(egui::PointerButton::Middle)
+                || ui.input(|i| i.modifiers.shift);
+            let h = rect.height().max(1.0) as f64;
+            if panning {
+                o.pan(-d.x as f64 / h, d.y as f64 / h);
+            } else {
+                o.rotate(-d.x as f64 * 0.01, d.y as f64 * 0.01);
+            }
+            o.zoom((-scroll as f64 * 0.002).exp());
+            keys.apply(o);
             // A pointer held still asks for nothing new (a request would
             // cancel the frame being drawn for the same camera).
-            if d != egui::Vec2::ZERO || scroll != 0.0 {
-                o.rotate(-d.x as f64 * 0.01, d.y as f64 * 0.01);
-                o.zoom((-scroll as f64 * 0.002).exp());
-                self.request_preview();
-            }
+            self.request_preview();
         }
-        if (response.drag_stopped() || (scroll != 0.0 && !response.dragged())) && self.orbit.is_some() {
+        if keys.held {
+            ui.ctx().request_repaint();
+        }
+        let navigating = response.dragged() || keys.held;
+        if !navigating && self.orbit.is_some() {
             let o = self.orbit.take().expect("orbiting");
-            let p = o.position();
-            self.edit(vec![playground::vec3_edit("camera.position", p)]);
+            let was = &self.doc.scene().camera;
+            let mut edits = vec![];
+            if o.target != was.target {
+                edits.push(playground::vec3_edit("camera.target", o.target));
+            }
+            edits.push(playground::vec3_edit("camera.position", o.position()));
+            self.edit(edits);
         }
     }
 

@@ -62,6 +62,25 @@ impl Orbit {
         }
     }
 
+    /// Slides the target (and the eye with it) across the view: `dx` to
+    /// the right and `dy` up on screen, in units of the distance to the
+    /// target, so a pan moves the picture by the same fraction at any zoom.
+    pub fn pan(&mut self, dx: f64, dy: f64) {
+        if !(dx.is_finite() && dy.is_finite()) {
+            return;
+        }
+        let (sy, cy) = self.yaw.sin_cos();
+        let (sp, cp) = self.pitch.sin_cos();
+        // The view direction is -(cp·sy, sp, cp·cy); right = forward × y
+        // and up = right × forward, both unit vectors.
+        let right = [cy, 0.0, -sy];
+        let up = [-sp * sy, cp, -sp * cy];
+        let r = self.distance;
+        for k in 0..3 {
+            self.target[k] += r * (dx * right[k] + dy * up[k]);
+        }
+    }
+
     /// The eye position.
     pub fn position(&self) -> [f64; 3] {
         let (sy, cy) = self.yaw.sin_cos();

@@ -596,3 +596,84 @@ fn an_orbit_asks_for_a_frame_per_move_and_none_while_the_pointer_is_still() {
     h.run_steps(2);
     assert_ne!(h.state().document().text(), original, "the release writes the camera");
 }
+
+/// The camera of the scene in the studio's document.
+fn camera_of(h: &Harness<'_, Studio>) -> isoray_scene::Camera {
+    h.state().document().scene().camera.clone()
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+}
+
+#[test]
+fn shift_drag_pans_the_target_and_the_eye_together_as_one_edit() {
+    let (_dir, path, _) = example_copy("showcase.toml");
+    let mut h = studio_on(&path);
+    let before = camera_of(&h);
+    let c = h.state().preview_rect().center();
+    h.hover_at(c);
+    h.run_steps(1);
+    h.event(egui::Event::ModifiersChanged(egui::Modifiers::SHIFT));
+    h.drag_at(c);
+    h.run_steps(1);
+    h.hover_at(c + egui::vec2(40.0, 0.0));
+    h.run_steps(1);
+    h.drop_at(c + egui::vec2(40.0, 0.0));
+    h.event(egui::Event::ModifiersChanged(egui::Modifiers::default()));
+    h.run_steps(2);
+    let after = camera_of(&h);
+    // A pan moves both points by the same vector, sideways to the view.
+    let dt: Vec<f64> = (0..3).map(|k| after.target[k] - before.target[k]).collect();
+    let dp: Vec<f64> = (0..3).map(|k| after.position[k] - before.position[k]).collect();
+    assert!(
+        dt.iter().map(|v| v * v).sum::<f64>().sqrt() > 1e-3,
+        "the target moved: {dt:?}"
+    );
+    for k in 0..3 {
+        assert!((dt[k] - dp[k]).abs() < 1e-6, "{dt:?} vs {dp:?}");
+    }
+    let view: Vec<f64> = (0..3).map(|k| before.target[k] - before.position[k]).collect();
+    let dot: f64 = (0..3).map(|k| dt[k] * view[k]).sum();
+    assert!(dot.abs() < 1e-6, "a pan is across the view, not along it");
+    // One undo step puts both back.
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(camera_of(&h).target, before.target);
+    assert_eq!(camera_of(&h).position, before.position);
+}
+
+#[test]
+fn arrow_keys_over_the_preview_orbit_and_minus_zooms_out() {
+    let (_dir, path, original) = example_copy("showcase.toml");
+    let mut h = studio_on(&path);
+    let before = camera_of(&h);
+    let c = h.state().preview_rect().center();
+    h.hover_at(c);
+    h.run_steps(1);
+    h.key_down(egui::Key::ArrowLeft);
+    h.run_steps(5);
+    assert_eq!(
+        h.state().document().text(),
+        original,
+        "nothing written while a key is held"
+    );
+    h.key_up(egui::Key::ArrowLeft);
+    h.run_steps(2);
+    let turned = camera_of(&h);
+    // An orbit keeps the target and the distance to it.
+    assert_eq!(turned.target, before.target);
+    let (d0, d1) = (
+        distance(before.position, before.target),
+        distance(turned.position, turned.target),
+    );
+    assert!((d0 - d1).abs() < 1e-6, "{d0} vs {d1}");
+    assert!(distance(turned.position, before.position) > 1e-3, "the eye moved");
+    // Minus zooms out: the same direction, farther away.
+    h.key_down(egui::Key::Minus);
+    h.run_steps(5);
+    h.key_up(egui::Key::Minus);
+    h.run_steps(2);
+    let out = camera_of(&h);
+    assert!(distance(out.position, out.target) > d1 + 1e-3);
+}
