@@ -30,6 +30,8 @@
 pub mod bounds;
 pub mod camera;
 pub mod output;
+pub mod sequence;
+pub mod tiles;
 pub mod trace;
 mod whitted;
 
@@ -291,8 +293,20 @@ fn empty_image(scene: &Scene, aovs: bool) -> RenderedImage {
 /// Renders the whole image, stopping with [`Cancelled`] when `opts.cancel` is
 /// cancelled (checked before every tile).
 pub fn render_with(scene: &Scene, opts: &RenderOptions) -> Result<(RenderedImage, Stats), Cancelled> {
+    render_region_image(scene, Region::full(scene), opts)
+}
+
+/// Renders `region` in one final pass into an image of the whole size
+/// (black outside the region). The region's pixels are byte for byte those
+/// of a whole render, so bands rendered apart (`isoray render --tile`)
+/// assemble into the same image.
+pub fn render_region_image(
+    scene: &Scene,
+    region: Region,
+    opts: &RenderOptions,
+) -> Result<(RenderedImage, Stats), Cancelled> {
     let mut img = empty_image(scene, opts.aovs);
-    let stats = render_into(scene, Region::full(scene), Pass::Final, opts, &NoSink, Some(&mut img))?;
+    let stats = render_into(scene, region, Pass::Final, opts, &NoSink, Some(&mut img))?;
     Ok((img, stats))
 }
 

@@ -44,14 +44,19 @@ pub fn write_text(path: &Path, text: &str) -> std::result::Result<(), OutputErro
 
 /// Writes linear RGB as an 8-bit sRGB PNG.
 pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> std::result::Result<(), OutputError> {
-    let bytes = to_srgb8(rgb);
+    write_png_srgb8(path, width, height, &to_srgb8(rgb))
+}
+
+/// Writes 8-bit sRGB bytes (r, g, b per pixel, row by row) as a PNG: the
+/// same file [`write_png`] writes for the linear colours they encode.
+pub fn write_png_srgb8(path: &Path, width: u32, height: u32, bytes: &[u8]) -> std::result::Result<(), OutputError> {
     atomically(path, |tmp| {
         if bytes.len() != width as usize * height as usize * 3 {
-            return Err(format!("{} pixels given for a {width}x{height} image", rgb.len()));
+            return Err(format!("{} pixels given for a {width}x{height} image", bytes.len() / 3));
         }
         image::save_buffer_with_format(
             tmp,
-            &bytes,
+            bytes,
             width,
             height,
             image::ColorType::Rgb8,

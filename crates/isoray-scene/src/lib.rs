@@ -23,18 +23,21 @@
 #![allow(clippy::result_large_err)]
 
 pub mod analytic;
+mod animation;
 mod compile;
 mod derive;
 pub mod doc;
 pub mod env;
 mod error;
 mod load;
+pub mod midi;
 mod model;
 mod read;
 mod reader;
 mod save;
 pub mod schema;
 
+pub use animation::{animation_keys, track_keys, Animation, Interpolation, Track};
 pub use compile::{CacheStats, ObjectCache};
 pub use derive::{analytic_allowed, Derived};
 pub use error::{SceneError, Sources};

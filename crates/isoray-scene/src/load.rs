@@ -99,6 +99,9 @@ pub fn load_str_with(text: &str, name: &str, overrides: &[String], options: &Loa
 }
 
 const TOP_KEYS: &[&str] = &[
+    "animation",
+    "track",
+    "midi",
     "camera",
     "render",
     "light",
@@ -278,7 +281,25 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         param_ranges: Vec::new(),
         surface_materials: Vec::new(),
     };
-    let params = b.read_params(top.get("params"))?;
+    let mut params = b.read_params(top.get("params"))?;
+    let animation = match top.get("animation") {
+        Some(v) => Some(crate::animation::read_animation(src, v)?),
+        None => None,
+    };
+    let mut tracks = match top.get("track") {
+        Some(v) => crate::animation::read_tracks(src, v)?,
+        None => Vec::new(),
+    };
+    let mut midi = match top.get("midi") {
+        Some(v) => crate::midi::read_mappings(src, v)?,
+        None => Vec::new(),
+    };
+    // MIDI mappings resolve and check their targets as tracks of their
+    // extreme values (probes) would.
+    let file_tracks = tracks.len();
+    tracks.extend(midi.iter().enumerate().map(|(i, m)| m.probe(i)));
+    let placed = crate::animation::resolve_early(src, &b.lib, &mut tracks, &params, &b.param_ranges)?;
+    crate::animation::apply_param_tracks(&mut b.lib, &tracks[..file_tracks], &mut params, options.time);
     let camera = b.read_camera(top.get("camera"))?;
     let environment = match top.get("environment") {
         None => None,
@@ -299,7 +320,12 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     let materials = b.read_materials(top.get("material"))?;
     b.read_surfaces(top.get("surface"), &materials)?;
     let cache = options.objects.clone().unwrap_or_default();
-    let mut objects = b.read_objects(top.get("object"), &materials, &cache)?;
+    let mut objects = b.read_objects(top.get("object"), &materials, &cache, &placed)?;
+    crate::animation::resolve_late(src, root, &mut tracks, objects.len(), &b.driven)?;
+    let probes = tracks.split_off(file_tracks);
+    for (m, p) in midi.iter_mut().zip(&probes) {
+        m.drive = p.drive.clone();
+    }
     // isoray-studio's layout: accepted and never read.
     let _ = top.get("studio");
     top.finish(TOP_KEYS)?;
@@ -314,12 +340,17 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                 input_names.push(format!("object.{i}.{name}"));
                 inputs.push(tr.values[k].eval_with(&inputs, [0.0; 3]));
             }
+            crate::model::place_by_tracks(&tracks, i, options.time, &mut inputs[tr.inputs as usize..]);
             check_scale(src, i, tr, inputs[tr.inputs as usize + 6])?;
         }
     }
     // The scene's distance and what renderers derive from the objects.
     let (shape, derived) = crate::derive::assemble(&mut objects, &materials, &render, &inputs);
-    Ok(Scene {
+    let mut scene = Scene {
+        animation,
+        tracks,
+        midi,
+        midi_tracks: Vec::new(),
         camera,
         render,
         lights,
@@ -339,5 +370,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
             root: root.to_vec(),
         }),
         cache,
-    })
+    };
+    scene.start_tracks()?;
+    Ok(scene)
 }

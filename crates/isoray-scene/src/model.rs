@@ -783,6 +783,9 @@ pub fn key_tables() -> Vec<(&'static str, &'static [KeySpec])> {
         ("### `[material.NAME]`", material_keys()),
         ("### `[surface.NAME]`", surface_keys()),
         ("### `[[object]]`", object_keys()),
+        ("### `[animation]`", crate::animation::animation_keys()),
+        ("### `[[track]]`", crate::animation::track_keys()),
+        ("### `[[midi]]`", crate::midi::midi_keys()),
     ]
 }
 
@@ -883,6 +886,15 @@ impl Transform {
 /// A loaded, checked and compiled scene.
 #[derive(Debug, Clone)]
 pub struct Scene {
+    /// The clock (`[animation]`): frame rate and duration, when given.
+    pub animation: Option<crate::animation::Animation>,
+    /// Keyframe tracks (`[[track]]`), applied whenever the time changes.
+    pub tracks: Vec<crate::animation::Track>,
+    /// MIDI mappings (`[[midi]]`): controllers to scene values.
+    pub midi: Vec<crate::midi::MidiMapping>,
+    /// What MIDI input drives now: the step tracks of a take
+    /// ([`Scene::play_midi`]) or live values ([`Scene::set_midi_value`]).
+    pub(crate) midi_tracks: Vec<crate::animation::Track>,
     /// The camera.
     pub camera: Camera,
     /// Render settings.
@@ -923,7 +935,26 @@ pub struct Scene {
 
 /// What a change of the base inputs leads to: the new inputs (placements
 /// computed again), the indices that changed, and the driven values.
-type NextInputs = (Vec<f64>, Vec<u32>, Option<Values>);
+type NextInputs = (Vec<f64>, Vec<u32>, Option<Values>, Vec<(String, Value)>);
+
+/// Overwrites the components of object `object`'s seven placement values
+/// (`values`, from its first input on) that tracks drive at time `t`.
+pub(crate) fn place_by_tracks<'a>(
+    tracks: impl IntoIterator<Item = &'a crate::animation::Track>,
+    object: usize,
+    t: f64,
+    values: &mut [f64],
+) {
+    for tr in tracks {
+        if let crate::animation::Drive::Placement { object: o, first } = *tr.drive() {
+            if o == object {
+                if let Some(v) = tr.sample(t) {
+                    values[first..first + v.len()].copy_from_slice(&v);
+                }
+            }
+        }
+    }
+}
 
 /// The values that [`Scene::set_value`] and driven expressions change,
 /// gathered so that a set of changes is checked before any is stored.
@@ -935,6 +966,42 @@ struct Values {
 }
 
 impl Values {
+    /// The numbers of `key` (as [`Scene::set_value`] names keys), if any.
+    fn get(&self, key: &str) -> Option<Vec<f64>> {
+        let numbers = |text: String| -> Option<Vec<f64>> {
+            let t = text.trim().trim_start_matches('[').trim_end_matches(']');
+            t.split(',').map(|x| x.trim().parse::<f64>().ok()).collect()
+        };
+        let parts: Vec<&str> = key.split('.').collect();
+        match parts[..] {
+            ["camera", field] => numbers(self.camera.value_text(field)?),
+            ["light", i, field] => {
+                let light = self.lights.get(i.parse::<usize>().ok()?)?;
+                match (field, &light.kind) {
+                    ("direction", LightKind::Directional { direction }) => Some(direction.to_vec()),
+                    (
+                        "position",
+                        LightKind::Point { position }
+                        | LightKind::Sphere { position, .. }
+                        | LightKind::Rect { position, .. },
+                    ) => Some(position.to_vec()),
+                    ("radius", LightKind::Sphere { radius, .. }) => Some(vec![*radius]),
+                    ("u", LightKind::Rect { u, .. }) => Some(u.to_vec()),
+                    ("v", LightKind::Rect { v, .. }) => Some(v.to_vec()),
+                    _ => numbers(light.value_text(field)?),
+                }
+            }
+            ["material", name, field] => {
+                let m = self.materials.iter().find(|m| m.name == name)?;
+                if field == "checker_size" {
+                    return m.checker.as_ref().map(|c| vec![c.1]);
+                }
+                numbers(m.value_text(field)?)
+            }
+            _ => None,
+        }
+    }
+
     /// Sets the value of `key` (as [`Scene::set_value`] describes), checked
     /// against the key's description and the rules the loader applies.
     fn set(&mut self, key: &str, value: &[f64]) -> Result<(), crate::SceneError> {
@@ -1048,7 +1115,6 @@ pub struct Driven {
     /// One expression per component (1, or 3 for vectors and colours).
     pub values: Vec<Shape>,
     /// Where it was written.
-    #[allow(dead_code)]
     pub(crate) origin: crate::doc::Origin,
 }
 
@@ -1130,8 +1196,9 @@ impl Scene {
                 "the time must be a finite number of seconds, found {t}"
             )));
         }
-        let (next, changed, values) = self.next_inputs(&[isoray_shape::TIME], |inputs| inputs[0] = t)?;
+        let (next, changed, values, params) = self.next_inputs(&[isoray_shape::TIME], |inputs| inputs[0] = t)?;
         self.library.set_time(t);
+        self.store_params(params);
         self.apply_inputs(next, changed, values)
     }
 
@@ -1170,8 +1237,21 @@ impl Scene {
                 )));
             }
         }
+        if let Some(i) = self.tracks.iter().position(|tr| tr.target == key) {
+            return Err(crate::SceneError::usage(format!(
+                "`{key}` is driven by `track.{i}`: change the track's keys, or remove it"
+            ))
+            .with_key(key));
+        }
+        // A take that drives the parameter keeps this as its value before
+        // its first event.
+        for tr in &mut self.midi_tracks {
+            if tr.target == key && !tr.hold_first {
+                tr.rest = Some(comps.clone());
+            }
+        }
         let vars: Vec<u32> = (at..at + ty.width() as u32).collect();
-        let (next, changed, values) = self.next_inputs(&vars, |inputs| {
+        let (next, changed, values, _) = self.next_inputs(&vars, |inputs| {
             for (k, x) in comps.iter().enumerate() {
                 inputs[at as usize + k] = *x;
             }
@@ -1183,6 +1263,16 @@ impl Scene {
         self.apply_inputs(next, changed, values)
     }
 
+    /// Stores parameter values that tracks set.
+    fn store_params(&mut self, params: Vec<(String, Value)>) {
+        for (name, value) in params {
+            self.library.set_param(&name, value);
+            if let Some(p) = self.params.iter_mut().find(|(n, _)| *n == name) {
+                p.1 = value;
+            }
+        }
+    }
+
     /// The inputs after setting base inputs with `set`, with every object
     /// placement computed again, and the indices that changed (`vars` and
     /// the placements that moved); an error when a scale is not positive.
@@ -1190,6 +1280,23 @@ impl Scene {
         let mut next = self.inputs.clone();
         set(&mut next);
         let mut changed = vars.to_vec();
+        let t = next.first().copied().unwrap_or(0.0);
+        // Parameters driven by tracks, before anything reads them.
+        let mut tracked_params = Vec::new();
+        for tr in self.all_tracks() {
+            let crate::animation::Drive::Param { name, at } = tr.drive() else {
+                continue;
+            };
+            let Some(v) = tr.sample(t) else { continue };
+            for (c, x) in v.iter().enumerate() {
+                let k = *at as usize + c;
+                if x.to_bits() != next[k].to_bits() {
+                    next[k] = *x;
+                    changed.push(k as u32);
+                }
+            }
+            tracked_params.push((name.clone(), crate::animation::value_of(&v)));
+        }
         for (i, o) in self.objects.iter().enumerate() {
             for (guard, what) in &o.fragment.guards {
                 let v = guard.eval_with(&next, [0.0; 3]);
@@ -1202,12 +1309,14 @@ impl Scene {
                 }
             }
             let Some(tr) = &o.transform else { continue };
+            let mut placement = [0.0; 7];
             for (k, value) in tr.values.iter().enumerate() {
+                placement[k] = value.eval_with(&next, [0.0; 3]);
+            }
+            place_by_tracks(self.all_tracks(), i, t, &mut placement);
+            crate::read::check_scale(&self.origin.sources, i, tr, placement[6])?;
+            for (k, v) in placement.into_iter().enumerate() {
                 let at = tr.inputs as usize + k;
-                let v = value.eval_with(&next, [0.0; 3]);
-                if k == 6 {
-                    crate::read::check_scale(&self.origin.sources, i, tr, v)?;
-                }
                 if v.to_bits() != next[at].to_bits() {
                     next[at] = v;
                     changed.push(at as u32);
@@ -1215,7 +1324,7 @@ impl Scene {
             }
         }
         let values = self.driven_values(&next)?;
-        Ok((next, changed, values))
+        Ok((next, changed, values, tracked_params))
     }
 
     /// Sets a camera, light or material value by its dotted key, as written
@@ -1249,7 +1358,10 @@ impl Scene {
     /// The camera, lights and materials with every driven value computed
     /// at the inputs `vars`, checked; None when no value is driven.
     fn driven_values(&self, vars: &[f64]) -> Result<Option<Values>, crate::SceneError> {
-        if self.driven.is_empty() {
+        let tracked = self
+            .all_tracks()
+            .filter(|tr| matches!(tr.drive(), crate::animation::Drive::Value));
+        if self.driven.is_empty() && tracked.clone().next().is_none() {
             return Ok(None);
         }
         let t = vars.first().copied().unwrap_or(0.0);
@@ -1260,7 +1372,121 @@ impl Scene {
                 .set(&d.key, &v)
                 .map_err(|e| crate::SceneError::usage(format!("{} (at t = {t}, from its expression)", e.message)))?;
         }
+        for tr in tracked {
+            if let Some(v) = tr.sample(t) {
+                values
+                    .set(&tr.target, &v)
+                    .map_err(|e| crate::SceneError::usage(format!("{} (at t = {t}, from its track)", e.message)))?;
+            }
+        }
         Ok(Some(values))
+    }
+
+    /// At load: checks every key of the tracks on camera, light and
+    /// material values as the loader checks such a value (an error points
+    /// at the track), then applies them at the scene's time.
+    pub(crate) fn start_tracks(&mut self) -> Result<(), crate::SceneError> {
+        let src = &self.origin.sources;
+        let probes: Vec<crate::animation::Track> = self
+            .midi
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                let mut p = m.probe(i);
+                p.drive = m.drive.clone();
+                p
+            })
+            .collect();
+        for tr in self.tracks.iter().chain(&probes) {
+            if !matches!(tr.drive(), crate::animation::Drive::Value) {
+                continue;
+            }
+            for (t, v) in &tr.keys {
+                let mut scratch = self.values();
+                scratch.set(&tr.target, v).map_err(|e| {
+                    let which = if tr.is_midi() {
+                        "its range".to_string()
+                    } else {
+                        format!("the key at t = {t}")
+                    };
+                    tr.error(src, format!("`{}`, {which}: {}", tr.label, e.message), &[])
+                })?;
+            }
+        }
+        if let Some(values) = self.driven_values(&self.inputs)? {
+            self.store_values(values);
+        }
+        Ok(())
+    }
+
+    /// The file's tracks, then what MIDI input drives.
+    fn all_tracks(&self) -> impl Iterator<Item = &crate::animation::Track> + Clone {
+        self.tracks.iter().chain(&self.midi_tracks)
+    }
+
+    /// Plays a take of MIDI events (from [`crate::midi::read_midi_file`]):
+    /// from now on each mapping's target is the value of the last event its
+    /// controller sent at or before the scene's time, and the scene's own
+    /// value before the first. The scene moves to its current time again.
+    pub fn play_midi(&mut self, events: &[crate::midi::MidiEvent]) -> Result<(), crate::SceneError> {
+        // The values before each controller's first event: the scene's own,
+        // from before any take.
+        self.midi_tracks.clear();
+        self.set_time(self.time())?;
+        let mut tracks = crate::midi::take_tracks(&self.midi, events);
+        for tr in &mut tracks {
+            tr.rest = self.own_value(tr);
+        }
+        self.midi_tracks = tracks;
+        self.set_time(self.time())
+    }
+
+    /// The value a track's target has now.
+    fn own_value(&self, tr: &crate::animation::Track) -> Option<Vec<f64>> {
+        use crate::animation::Drive;
+        match tr.drive() {
+            Drive::Param { name, .. } => self.params.iter().find(|(n, _)| n == name).map(|(_, v)| match *v {
+                Value::Float(x) => vec![x],
+                Value::Vec2(a) => a.to_vec(),
+                Value::Vec3(a) => a.to_vec(),
+            }),
+            Drive::Placement { object, first } => {
+                let tr_inputs = self.objects.get(*object)?.transform.as_ref()?.inputs as usize;
+                let at = tr_inputs + first;
+                let width = if *first == 6 { 1 } else { 3 };
+                self.inputs.get(at..at + width).map(<[f64]>::to_vec)
+            }
+            Drive::Value => self.values().get(&tr.target),
+            Drive::Unresolved => None,
+        }
+    }
+
+    /// Live MIDI input: mapping `mapping` now holds the value controller
+    /// value `v` gives, at every time, until the next call (or a take).
+    pub fn set_midi_value(&mut self, mapping: usize, v: u8) -> Result<(), crate::SceneError> {
+        let Some(m) = self.midi.get(mapping) else {
+            return Err(crate::SceneError::usage(format!(
+                "the scene has {} MIDI mapping(s), not {}",
+                self.midi.len(),
+                mapping + 1
+            )));
+        };
+        let mut t = crate::animation::Track::new(
+            &m.target,
+            vec![(0.0, vec![m.value(v)])],
+            crate::Interpolation::Step,
+            false,
+        );
+        t.drive = m.drive.clone();
+        t.label = format!("midi.{mapping}");
+        self.midi_tracks.retain(|o| o.target != m.target);
+        self.midi_tracks.push(t);
+        self.set_time(self.time())
+    }
+
+    /// The track that drives `key` (`params.k`, `light.0.intensity`), if any.
+    pub fn track_of(&self, key: &str) -> Option<&crate::animation::Track> {
+        self.tracks.iter().find(|t| t.target == key)
     }
 
     /// Applies new inputs: recompiles objects that bound a changed one, and

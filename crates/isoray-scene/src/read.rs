@@ -43,7 +43,7 @@ fn named_tables<'v>(src: &Sources, v: &'v Located, message: &str) -> Result<&'v 
 
 /// The tables of an array of tables (`[[key]]`); a single table counts as
 /// one when `single` allows it.
-fn array_of_tables<'v>(src: &Sources, v: &'v Located, key: &str, single: bool) -> Result<Vec<&'v Located>> {
+pub(crate) fn array_of_tables<'v>(src: &Sources, v: &'v Located, key: &str, single: bool) -> Result<Vec<&'v Located>> {
     match &v.item {
         Item::Array(items) => Ok(items.iter().collect()),
         Item::Table(_) if single => Ok(vec![v]),
@@ -442,6 +442,7 @@ impl<'a> Build<'a> {
         table: Option<&'a Located>,
         materials: &[Material],
         cache: &crate::compile::ObjectCache,
+        placed: &[usize],
     ) -> Result<Vec<Object>> {
         let src = self.src;
         let shape_error = self.shape_errors();
@@ -483,7 +484,8 @@ impl<'a> Build<'a> {
                         placement.push((key, r.get(key)));
                     }
                     r.finish_keys(object_keys())?;
-                    let transform = if placement.iter().any(|(_, v)| v.is_some()) {
+                    // Placed in the file, or by a track (which needs the inputs).
+                    let transform = if placement.iter().any(|(_, v)| v.is_some()) || placed.contains(&i) {
                         let mut values: Vec<Shape> = Vec::with_capacity(7);
                         for (key, v) in &placement {
                             let ctx = format!("object.{i}.{key}");

@@ -13,6 +13,40 @@ use crate::{io_failure, jobs, Failure, GpuKernel, HowToRender, Rendered};
 /// software one), with a progress bar over the bands and, with `timing`,
 /// the pipeline build and each pass's GPU time on stderr.
 pub(crate) fn render_gpu(scene: &Scene, aovs: bool, how: &HowToRender) -> Result<Rendered, Failure> {
+    let start = Instant::now();
+    let mut session = GpuSession::new()?;
+    let mut r = session.render(scene, aovs, how)?;
+    r.elapsed = start.elapsed().as_secs_f64();
+    Ok(r)
+}
+
+/// A GPU renderer kept across frames, so its pipeline is built once.
+pub(crate) struct GpuSession {
+    renderer: GpuRenderer,
+    adapter: String,
+}
+
+impl GpuSession {
+    /// Opens the first Vulkan adapter.
+    pub(crate) fn new() -> Result<GpuSession, Failure> {
+        let renderer = GpuRenderer::new().map_err(gpu_failure)?;
+        let adapter = renderer.gpu().adapter_name();
+        Ok(GpuSession { renderer, adapter })
+    }
+
+    /// Renders one image of `scene`.
+    pub(crate) fn render(&mut self, scene: &Scene, aovs: bool, how: &HowToRender) -> Result<Rendered, Failure> {
+        render_on(&mut self.renderer, &self.adapter, scene, aovs, how)
+    }
+}
+
+fn render_on(
+    renderer: &mut GpuRenderer,
+    adapter: &str,
+    scene: &Scene,
+    aovs: bool,
+    how: &HowToRender,
+) -> Result<Rendered, Failure> {
     let (timing, quiet) = (how.timing, how.quiet);
     let kernel = match how.gpu_kernel {
         GpuKernel::Auto => None,
@@ -20,8 +54,6 @@ pub(crate) fn render_gpu(scene: &Scene, aovs: bool, how: &HowToRender) -> Result
         GpuKernel::Interpreted => Some(Kernel::Interpreted),
     };
     let start = Instant::now();
-    let mut renderer = GpuRenderer::new().map_err(gpu_failure)?;
-    let adapter = renderer.gpu().adapter_name();
     let progress = Arc::new(Counter::default());
     let opts = GpuRenderOptions {
         aovs,

@@ -2,6 +2,7 @@
 
 mod algebra_cmd;
 mod compare;
+mod frames_cmd;
 #[cfg(feature = "gpu")]
 mod gpu_cmd;
 #[cfg(feature = "gpu")]
@@ -18,7 +19,7 @@ use std::time::{Duration, Instant};
 
 use clap::{Parser, Subcommand};
 use isoray_job::Counter;
-use isoray_render::{output, render_with, tile_count, RenderOptions};
+use isoray_render::{output, tile_count, RenderOptions};
 use isoray_scene::{load_with, LoadOptions, Scene, SceneError};
 
 /// Model implicit surfaces and render them with rays.
@@ -93,6 +94,33 @@ enum Command {
         /// With `--backend gpu`: how the GPU evaluates distances.
         #[arg(long, value_enum, default_value = "auto", value_name = "KERNEL")]
         gpu_kernel: GpuKernel,
+        /// Render the frames A to B of the scene's [animation] (both
+        /// included; `A..` runs to the end of its duration), frame n at
+        /// t = n / fps. OUT is then a numbered pattern (frame_%04d.png), a
+        /// .gif, an .apng, or an .mp4 (with ffmpeg on the PATH).
+        #[arg(long, value_name = "A..B", value_parser = frames_cmd::parse_frames)]
+        frames: Option<frames_cmd::FrameRange>,
+        /// With --frames: render only part I (from 0) of N contiguous parts
+        /// of the range, for batch arrays (Slurm, Kubernetes Indexed Jobs).
+        #[arg(long, value_name = "I/N", value_parser = frames_cmd::parse_part, requires = "frames")]
+        shard: Option<frames_cmd::Part>,
+        /// Render only band I (from 0) of N horizontal bands of rows of the
+        /// still, to a PNG that `isoray merge` assembles into the whole image.
+        #[arg(long, value_name = "I/N", value_parser = frames_cmd::parse_part, conflicts_with = "frames")]
+        tile: Option<frames_cmd::Part>,
+    },
+    /// Assemble the bands of `isoray render --tile I/N` into the whole image,
+    /// byte for byte the PNG one `isoray render` would have written.
+    Merge {
+        /// The band PNGs, in any order.
+        #[arg(required = true, value_name = "BAND.png")]
+        bands: Vec<PathBuf>,
+        /// The whole image (PNG).
+        #[arg(short, long, value_name = "OUT.png")]
+        output: PathBuf,
+        /// No summary.
+        #[arg(short, long)]
+        quiet: bool,
     },
     /// Read points `x y z` from stdin and print the scene's signed distance at each.
     Eval {
@@ -291,9 +319,15 @@ pub(crate) struct SceneArgs {
     /// or params.k=0.5 (a parameter outside its declared range is an error).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
-    /// The time t in seconds, which shape text reads as `t` (default 0).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_name = "T")]
-    time: f64,
+    /// The time t in seconds, which shape text and tracks read (default 0);
+    /// a fraction N/D is N / D, so `--time 7/24` is frame 7 at 24 fps.
+    #[arg(long, allow_hyphen_values = true, value_name = "T", value_parser = frames_cmd::parse_time)]
+    pub(crate) time: Option<f64>,
+    /// A MIDI file whose control changes and notes drive the scene's
+    /// [[midi]] mappings: at each time, the last value each controller sent
+    /// at or before it (the scene's own value before the first).
+    #[arg(long, value_name = "TAKE.mid")]
+    midi: Option<PathBuf>,
 }
 
 impl SceneArgs {
@@ -304,7 +338,7 @@ impl SceneArgs {
         // Long surface analyses (implicitization) show a bar on a terminal.
         let bar = jobs::JobBar::for_terminal();
         let opts = LoadOptions {
-            time: self.time,
+            time: self.time.unwrap_or(0.0),
             cancel: Some(jobs::cancel_token()),
             progress: jobs::reporter(&bar),
             ..LoadOptions::default()
@@ -313,7 +347,25 @@ impl SceneArgs {
         if let Some(b) = &bar {
             b.finish();
         }
-        Ok(scene?)
+        let mut scene = scene?;
+        if let Some(path) = &self.midi {
+            if scene.midi.is_empty() {
+                return Err(usage(format!(
+                    "`{}` has no [[midi]] mappings, so --midi {} would drive nothing",
+                    self.scene.display(),
+                    path.display()
+                )));
+            }
+            let events = isoray_scene::midi::read_midi_file(path).map_err(|e| {
+                let io = !path.exists();
+                Failure {
+                    code: if io { 1 } else { 2 },
+                    message: e,
+                }
+            })?;
+            scene.play_midi(&events)?;
+        }
+        Ok(scene)
     }
 
     /// The scene file.
@@ -360,6 +412,9 @@ fn main() -> ExitCode {
             backend,
             timing,
             gpu_kernel,
+            frames,
+            shard,
+            tile,
         } => {
             let mut overrides = Vec::new();
             overrides.extend(width.map(|w| format!("render.width={w}")));
@@ -378,8 +433,13 @@ fn main() -> ExitCode {
                 timing,
                 gpu_kernel,
             };
-            cmd_render(&input, &overrides, &outputs, &how)
+            match (frames, tile) {
+                (Some(range), _) => frames_cmd::render_frames(&input, &overrides, &outputs, &how, range, shard),
+                (None, Some(part)) => frames_cmd::render_tile(&input, &overrides, &outputs, &how, part),
+                (None, None) => cmd_render(&input, &overrides, &outputs, &how),
+            }
         }
+        Command::Merge { bands, output, quiet } => frames_cmd::cmd_merge(&bands, &output, quiet),
         Command::Eval { input } => cmd_eval(&input),
         Command::Groebner {
             vars,
@@ -573,18 +633,18 @@ pub(crate) fn io_failure(message: String) -> Failure {
 }
 
 /// The files `isoray render` writes.
-struct Outputs<'a> {
-    png: &'a Path,
-    depth: Option<&'a Path>,
-    normals: Option<&'a Path>,
-    albedo: Option<&'a Path>,
+pub(crate) struct Outputs<'a> {
+    pub(crate) png: &'a Path,
+    pub(crate) depth: Option<&'a Path>,
+    pub(crate) normals: Option<&'a Path>,
+    pub(crate) albedo: Option<&'a Path>,
 }
 
 /// How `isoray render` runs: threads, output on the terminal, backend.
 pub(crate) struct HowToRender {
-    threads: Option<usize>,
+    pub(crate) threads: Option<usize>,
     pub(crate) quiet: bool,
-    backend: Backend,
+    pub(crate) backend: Backend,
     pub(crate) timing: bool,
     pub(crate) gpu_kernel: GpuKernel,
 }
@@ -599,7 +659,28 @@ pub(crate) struct Rendered {
 }
 
 /// Renders on the CPU with a progress bar.
-fn render_cpu(scene: &Scene, aovs: bool, threads: Option<usize>, quiet: bool) -> Result<Rendered, Failure> {
+pub(crate) fn render_cpu(scene: &Scene, aovs: bool, threads: Option<usize>, quiet: bool) -> Result<Rendered, Failure> {
+    render_region_cpu_with(scene, isoray_render::Region::full(scene), aovs, threads, quiet)
+}
+
+/// Renders the rows of `region` on the CPU (a whole-size image, black
+/// outside), with a progress bar.
+pub(crate) fn render_region_cpu(
+    scene: &Scene,
+    region: isoray_render::Region,
+    threads: Option<usize>,
+    quiet: bool,
+) -> Result<Rendered, Failure> {
+    render_region_cpu_with(scene, region, false, threads, quiet)
+}
+
+fn render_region_cpu_with(
+    scene: &Scene,
+    region: isoray_render::Region,
+    aovs: bool,
+    threads: Option<usize>,
+    quiet: bool,
+) -> Result<Rendered, Failure> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()
@@ -612,7 +693,7 @@ fn render_cpu(scene: &Scene, aovs: bool, threads: Option<usize>, quiet: bool) ->
     };
     let start = Instant::now();
     let result = std::thread::scope(|sc| {
-        let handle = sc.spawn(|| pool.install(|| render_with(scene, &opts)));
+        let handle = sc.spawn(|| pool.install(|| isoray_render::render_region_image(scene, region, &opts)));
         if !quiet {
             show_progress(&handle, &progress, tile_count(scene), start);
         }
@@ -633,10 +714,16 @@ fn render_cpu(scene: &Scene, aovs: bool, threads: Option<usize>, quiet: bool) ->
 
 #[cfg(not(feature = "gpu"))]
 fn render_gpu(_scene: &Scene, _aovs: bool, _how: &HowToRender) -> Result<Rendered, Failure> {
-    Err(io_failure(
+    Err(no_gpu())
+}
+
+/// The error of `--backend gpu` in a build without the GPU backend.
+#[cfg(not(feature = "gpu"))]
+pub(crate) fn no_gpu() -> Failure {
+    io_failure(
         "this isoray was built without the GPU backend; build it with `cargo build --release -p isoray --features gpu`"
             .into(),
-    ))
+    )
 }
 
 fn cmd_render(input: &SceneArgs, overrides: &[String], outputs: &Outputs, how: &HowToRender) -> Result<(), Failure> {
