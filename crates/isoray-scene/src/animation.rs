@@ -100,6 +100,9 @@ pub struct Track {
     /// The value before the first key of a track that does not hold it:
     /// the scene's own value when a MIDI take was started.
     pub(crate) rest: Option<Vec<f64>>,
+    /// Keys are quaternions [x, y, z, w] (a bone's rotation): linear
+    /// interpolation is a slerp, smooth interpolation is normalised.
+    pub(crate) quaternion: bool,
 }
 
 impl Track {
@@ -115,6 +118,7 @@ impl Track {
             drive: Drive::Unresolved,
             label: format!("track on {target}"),
             rest: None,
+            quaternion: false,
         }
     }
 
@@ -150,6 +154,12 @@ impl Track {
         let u = (t - t0) / h;
         Some(match self.interpolation {
             Interpolation::Step => p0.clone(),
+            Interpolation::Linear if self.quaternion => {
+                let (a, b) = (crate::skeleton::rotation_of(p0), crate::skeleton::rotation_of(p1));
+                // The shorter way round.
+                let b = if a.dot(b) < 0.0 { -b } else { b };
+                a.slerp(b, u).to_array().to_vec()
+            }
             Interpolation::Linear => p0.iter().zip(p1).map(|(a, b)| a + (b - a) * u).collect(),
             Interpolation::Smooth => {
                 let (m0, m1) = (self.slope(i), self.slope(i + 1));
@@ -158,9 +168,14 @@ impl Track {
                 let h10 = u3 - 2.0 * u2 + u;
                 let h01 = -2.0 * u3 + 3.0 * u2;
                 let h11 = u3 - u2;
-                (0..p0.len())
+                let v: Vec<f64> = (0..p0.len())
                     .map(|c| h00 * p0[c] + h10 * h * m0[c] + h01 * p1[c] + h11 * h * m1[c])
-                    .collect()
+                    .collect();
+                if self.quaternion {
+                    crate::skeleton::rotation_of(&v).to_array().to_vec()
+                } else {
+                    v
+                }
             }
         })
     }
@@ -308,6 +323,7 @@ pub(crate) fn read_tracks(src: &Sources, v: &Located) -> Result<Vec<Track>> {
             drive: Drive::Unresolved,
             label: ctx.clone(),
             rest: None,
+            quaternion: false,
         });
     }
     Ok(tracks)
@@ -392,6 +408,25 @@ pub(crate) enum Drive {
     },
     /// A camera, light or material value, set through [`crate::Scene::set_value`].
     Value,
+    /// A bone's local rotation (`rotation` true) or position.
+    Bone {
+        /// The bone's index.
+        bone: usize,
+        /// Its rotation rather than its position.
+        rotation: bool,
+    },
+}
+
+/// The numbers of a value: a number, or an array of numbers.
+pub(crate) fn numbers(v: &Located) -> Option<Vec<f64>> {
+    let num = |at: &Located| match at.item {
+        Item::Num(x, _) if x.is_finite() => Some(x),
+        _ => None,
+    };
+    match &v.item {
+        Item::Array(xs) => xs.iter().map(num).collect(),
+        _ => num(v).map(|x| vec![x]),
+    }
 }
 
 /// The placement parts a track can drive, with their first input and width.
@@ -425,10 +460,53 @@ pub(crate) fn resolve_early(
     tracks: &mut [Track],
     params: &[(String, isoray_shape::Value)],
     ranges: &[crate::ParamRange],
+    bones: &[crate::skeleton::Bone],
 ) -> Result<Vec<usize>> {
     let mut placed = Vec::new();
     for tr in tracks.iter_mut() {
         let label = tr.label.clone();
+        if let Some(rest) = tr.target.strip_prefix("bone.") {
+            let (name, part) = rest.rsplit_once('.').unwrap_or((rest, ""));
+            let Some(bone) = bones.iter().position(|b| b.name == name) else {
+                let mut notes = vec![];
+                if let Some(s) = isoray_shape::diag::suggest(name, bones.iter().map(|b| b.name.as_str())) {
+                    notes.push(format!("did you mean `bone.{s}.{part}`?"));
+                }
+                return Err(tr.error(
+                    src,
+                    format!("`{label}`: the scene has no bone named \"{name}\""),
+                    &notes,
+                ));
+            };
+            match part {
+                "rotation" => {
+                    if tr.width() != 3 && tr.width() != 4 {
+                        return Err(tr.error(
+                            src,
+                            format!(
+                                "`{label}`: a bone's rotation takes [x, y, z] degrees or a quaternion [x, y, z, w], found {} component(s)",
+                                tr.width()
+                            ),
+                            &[],
+                        ));
+                    }
+                    tr.quaternion = tr.width() == 4;
+                }
+                "position" => tr.check_width(src, 3, "a position")?,
+                _ => {
+                    return Err(tr.error(
+                        src,
+                        format!("`{label}`: a bone's track drives its `rotation` or `position`, not `{part}`"),
+                        &[],
+                    ))
+                }
+            }
+            tr.drive = Drive::Bone {
+                bone,
+                rotation: part == "rotation",
+            };
+            continue;
+        }
         if let Some(name) = tr.target.strip_prefix("params.") {
             let Some((at, ty)) = lib.param_input(name) else {
                 let names: Vec<&str> = params.iter().map(|(n, _)| n.as_str()).collect();
@@ -526,7 +604,7 @@ pub(crate) fn resolve_late(
     driven: &[crate::Driven],
 ) -> Result<()> {
     for tr in tracks.iter_mut() {
-        if matches!(tr.drive, Drive::Param { .. }) {
+        if matches!(tr.drive, Drive::Param { .. } | Drive::Bone { .. }) {
             continue;
         }
         let label = tr.label.clone();
@@ -580,7 +658,7 @@ pub(crate) fn resolve_late(
             return Err(tr.error(
                 src,
                 format!("`{label}`: `{}` is not a value a track can drive", tr.target),
-                &["targets: `params.NAME`, `object.N.position` (`rotation`, `scale`), `camera.KEY`, `light.N.KEY`, `material.NAME.KEY`".into()],
+                &["targets: `params.NAME`, `object.N.position` (`rotation`, `scale`), `camera.KEY`, `light.N.KEY`, `material.NAME.KEY`, `bone.NAME.rotation` (`position`)".into()],
             ));
         }
         if let Some(d) = driven.iter().find(|d| d.key == tr.target) {

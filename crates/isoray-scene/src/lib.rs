@@ -36,6 +36,7 @@ mod read;
 mod reader;
 mod save;
 pub mod schema;
+pub mod skeleton;
 
 pub use animation::{animation_keys, track_keys, Animation, Interpolation, Track};
 pub use compile::{CacheStats, ObjectCache};

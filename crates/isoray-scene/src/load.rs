@@ -102,6 +102,7 @@ const TOP_KEYS: &[&str] = &[
     "animation",
     "track",
     "midi",
+    "bone",
     "camera",
     "render",
     "light",
@@ -290,6 +291,10 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         Some(v) => crate::animation::read_tracks(src, v)?,
         None => Vec::new(),
     };
+    let bones = match top.get("bone") {
+        Some(v) => crate::skeleton::read_bones(src, v)?,
+        None => Vec::new(),
+    };
     let mut midi = match top.get("midi") {
         Some(v) => crate::midi::read_mappings(src, v)?,
         None => Vec::new(),
@@ -298,7 +303,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     // extreme values (probes) would.
     let file_tracks = tracks.len();
     tracks.extend(midi.iter().enumerate().map(|(i, m)| m.probe(i)));
-    let placed = crate::animation::resolve_early(src, &b.lib, &mut tracks, &params, &b.param_ranges)?;
+    let placed = crate::animation::resolve_early(src, &b.lib, &mut tracks, &params, &b.param_ranges, &bones)?;
     crate::animation::apply_param_tracks(&mut b.lib, &tracks[..file_tracks], &mut params, options.time);
     let camera = b.read_camera(top.get("camera"))?;
     let environment = match top.get("environment") {
@@ -320,7 +325,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     let materials = b.read_materials(top.get("material"))?;
     b.read_surfaces(top.get("surface"), &materials)?;
     let cache = options.objects.clone().unwrap_or_default();
-    let mut objects = b.read_objects(top.get("object"), &materials, &cache, &placed)?;
+    let mut objects = b.read_objects(top.get("object"), &materials, &cache, &placed, &bones)?;
     crate::animation::resolve_late(src, root, &mut tracks, objects.len(), &b.driven)?;
     let probes = tracks.split_off(file_tracks);
     for (m, p) in midi.iter_mut().zip(&probes) {
@@ -334,6 +339,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     // The inputs: the time, the parameters, then seven per placed object.
     let mut input_names = lib.input_names();
     let mut inputs = lib.input_values();
+    let frames = crate::model::bone_frames(&bones, &tracks, options.time);
     for (i, o) in objects.iter().enumerate() {
         if let Some(tr) = &o.transform {
             for (k, name) in TRANSFORM_INPUTS.iter().enumerate() {
@@ -341,6 +347,9 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
                 inputs.push(tr.values[k].eval_with(&inputs, [0.0; 3]));
             }
             crate::model::place_by_tracks(&tracks, i, options.time, &mut inputs[tr.inputs as usize..]);
+            if let Some(b) = o.bone {
+                crate::skeleton::carry(&frames[b], &mut inputs[tr.inputs as usize..]);
+            }
             check_scale(src, i, tr, inputs[tr.inputs as usize + 6])?;
         }
     }
@@ -349,6 +358,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     let mut scene = Scene {
         animation,
         tracks,
+        bones,
         midi,
         midi_tracks: Vec::new(),
         camera,

@@ -676,6 +676,12 @@ pub fn object_keys() -> &'static [KeySpec] {
                 "1.0",
                 "uniform scale; distances stay exact: d(p) = s·d₀(p/s)",
             ),
+            key_without_default(
+                "bone",
+                Kind::Str,
+                "none",
+                "the `[[bone]]` that carries the object: `position` and `rotation` are then in the bone's frame",
+            ),
         ]
     });
     &KEYS
@@ -786,6 +792,7 @@ pub fn key_tables() -> Vec<(&'static str, &'static [KeySpec])> {
         ("### `[animation]`", crate::animation::animation_keys()),
         ("### `[[track]]`", crate::animation::track_keys()),
         ("### `[[midi]]`", crate::midi::midi_keys()),
+        ("### `[[bone]]`", crate::skeleton::bone_keys()),
     ]
 }
 
@@ -803,6 +810,9 @@ pub struct Object {
     /// Where the object is placed (`position`, `rotation`, `scale`), when
     /// any of them is given.
     pub transform: Option<Transform>,
+    /// The bone that carries the object (`bone = "NAME"`): its placement
+    /// is then in the bone's frame.
+    pub bone: Option<usize>,
     /// Inputs whose values were bound into `shape` as constants by exact
     /// algebra (implicit and parametric surfaces): changing one recompiles
     /// the object. Every other input the shape reads stays live.
@@ -890,6 +900,8 @@ pub struct Scene {
     pub animation: Option<crate::animation::Animation>,
     /// Keyframe tracks (`[[track]]`), applied whenever the time changes.
     pub tracks: Vec<crate::animation::Track>,
+    /// The skeleton (`[[bone]]`), parents before children, at rest.
+    pub bones: Vec<crate::skeleton::Bone>,
     /// MIDI mappings (`[[midi]]`): controllers to scene values.
     pub midi: Vec<crate::midi::MidiMapping>,
     /// What MIDI input drives now: the step tracks of a take
@@ -936,6 +948,31 @@ pub struct Scene {
 /// What a change of the base inputs leads to: the new inputs (placements
 /// computed again), the indices that changed, and the driven values.
 type NextInputs = (Vec<f64>, Vec<u32>, Option<Values>, Vec<(String, Value)>);
+
+/// The world frames of the bones at time `t`: their rest frames with the
+/// rotations and positions that tracks drive.
+pub(crate) fn bone_frames<'a>(
+    bones: &[crate::skeleton::Bone],
+    tracks: impl IntoIterator<Item = &'a crate::animation::Track>,
+    t: f64,
+) -> Vec<crate::skeleton::Frame> {
+    if bones.is_empty() {
+        return Vec::new();
+    }
+    let mut locals = crate::skeleton::rest_frames(bones);
+    for tr in tracks {
+        if let crate::animation::Drive::Bone { bone, rotation } = *tr.drive() {
+            if let Some(v) = tr.sample(t) {
+                if rotation {
+                    locals[bone].rotation = crate::skeleton::rotation_of(&v);
+                } else {
+                    locals[bone].position = glam::DVec3::new(v[0], v[1], v[2]);
+                }
+            }
+        }
+    }
+    crate::skeleton::world_frames(bones, &locals)
+}
 
 /// Overwrites the components of object `object`'s seven placement values
 /// (`values`, from its first input on) that tracks drive at time `t`.
@@ -1297,6 +1334,7 @@ impl Scene {
             }
             tracked_params.push((name.clone(), crate::animation::value_of(&v)));
         }
+        let frames = bone_frames(&self.bones, self.all_tracks(), t);
         for (i, o) in self.objects.iter().enumerate() {
             for (guard, what) in &o.fragment.guards {
                 let v = guard.eval_with(&next, [0.0; 3]);
@@ -1314,6 +1352,9 @@ impl Scene {
                 placement[k] = value.eval_with(&next, [0.0; 3]);
             }
             place_by_tracks(self.all_tracks(), i, t, &mut placement);
+            if let Some(b) = o.bone {
+                crate::skeleton::carry(&frames[b], &mut placement);
+            }
             crate::read::check_scale(&self.origin.sources, i, tr, placement[6])?;
             for (k, v) in placement.into_iter().enumerate() {
                 let at = tr.inputs as usize + k;
@@ -1457,6 +1498,14 @@ impl Scene {
                 self.inputs.get(at..at + width).map(<[f64]>::to_vec)
             }
             Drive::Value => self.values().get(&tr.target),
+            Drive::Bone { bone, rotation } => {
+                let b = self.bones.get(*bone)?;
+                Some(if *rotation {
+                    b.rotation.to_vec()
+                } else {
+                    b.position.to_vec()
+                })
+            }
             Drive::Unresolved => None,
         }
     }

@@ -443,6 +443,7 @@ impl<'a> Build<'a> {
         materials: &[Material],
         cache: &crate::compile::ObjectCache,
         placed: &[usize],
+        bones: &[crate::skeleton::Bone],
     ) -> Result<Vec<Object>> {
         let src = self.src;
         let shape_error = self.shape_errors();
@@ -483,31 +484,57 @@ impl<'a> Build<'a> {
                     for key in TRANSFORM_KEYS {
                         placement.push((key, r.get(key)));
                     }
+                    let bone = match r.string("bone")? {
+                        None => None,
+                        Some((name, loc)) => match bones.iter().position(|b| b.name == name) {
+                            Some(k) => Some(k),
+                            None => {
+                                let mut notes = vec![];
+                                if let Some(s) =
+                                    isoray_shape::diag::suggest(name, bones.iter().map(|b| b.name.as_str()))
+                                {
+                                    notes.push(format!("did you mean \"{s}\"?"));
+                                }
+                                if bones.is_empty() {
+                                    notes.push("define bones with [[bone]] tables".into());
+                                }
+                                return Err(src
+                                    .error(
+                                        loc.origin,
+                                        format!("`object.{i}.bone`: the scene has no bone named \"{name}\""),
+                                        Some("unknown bone"),
+                                        &notes,
+                                    )
+                                    .with_key(format!("object.{i}.bone")));
+                            }
+                        },
+                    };
                     r.finish_keys(object_keys())?;
                     // Placed in the file, or by a track (which needs the inputs).
-                    let transform = if placement.iter().any(|(_, v)| v.is_some()) || placed.contains(&i) {
-                        let mut values: Vec<Shape> = Vec::with_capacity(7);
-                        for (key, v) in &placement {
-                            let ctx = format!("object.{i}.{key}");
-                            let (width, default) = if *key == "scale" { (1, 1.0) } else { (3, 0.0) };
-                            let Some(v) = v else {
-                                values.extend((0..width).map(|_| constant_shape(default)));
-                                continue;
-                            };
-                            let vals = uniform_values(src, lib, v, &ctx, width, snippets)
-                                .map_err(|e| e.into_scene(snippets, &shape_error))?;
-                            values.extend(vals);
-                        }
-                        let inputs = lib.input_count() as u32 + 7 * transformed as u32;
-                        transformed += 1;
-                        Some(Transform {
-                            inputs,
-                            values: values.try_into().expect("seven values"),
-                            scale_origin: placement[2].1.map(|l| l.origin),
-                        })
-                    } else {
-                        None
-                    };
+                    let transform =
+                        if placement.iter().any(|(_, v)| v.is_some()) || placed.contains(&i) || bone.is_some() {
+                            let mut values: Vec<Shape> = Vec::with_capacity(7);
+                            for (key, v) in &placement {
+                                let ctx = format!("object.{i}.{key}");
+                                let (width, default) = if *key == "scale" { (1, 1.0) } else { (3, 0.0) };
+                                let Some(v) = v else {
+                                    values.extend((0..width).map(|_| constant_shape(default)));
+                                    continue;
+                                };
+                                let vals = uniform_values(src, lib, v, &ctx, width, snippets)
+                                    .map_err(|e| e.into_scene(snippets, &shape_error))?;
+                                values.extend(vals);
+                            }
+                            let inputs = lib.input_count() as u32 + 7 * transformed as u32;
+                            transformed += 1;
+                            Some(Transform {
+                                inputs,
+                                values: values.try_into().expect("seven values"),
+                                scale_origin: placement[2].1.map(|l| l.origin),
+                            })
+                        } else {
+                            None
+                        };
                     let Item::Str(_, map) = &loc.item else { unreachable!() };
                     let id = snippets.len();
                     snippets.push((loc, map));
@@ -568,6 +595,7 @@ impl<'a> Build<'a> {
                     });
                     objects.push(Object {
                         name,
+                        bone,
                         material,
                         source: text.to_string(),
                         shape: constant_shape(EMPTY),
