@@ -12,7 +12,10 @@
 //! in the same process. With `--latency` it also prints the time from a
 //! parameter change (the first `[params]` entry, else the time) to the
 //! next finished frame, and from a structural edit (a new object) to the
-//! next finished frame, pipeline build included.
+//! next finished frame, pipeline build included. A scene with an
+//! `[animation]` is played: each frame moves it to the next frame's time
+//! (tracks, bones, MIDI mappings) before it is drawn, and the wall time
+//! includes that move and the upload of the new inputs.
 
 use std::time::{Duration, Instant};
 
@@ -111,19 +114,35 @@ fn run() -> Result<(), String> {
         ..Default::default()
     };
     let frame = |gpu: &mut GpuRenderer, scene: &Scene| gpu.render(scene, &opts).map_err(|e| e.to_string());
+    let anim = scene.animation;
+    let mut tick = 0u64;
+    // The next frame's time, for an animated scene.
+    let mut advance = |scene: &mut Scene| -> Result<Duration, String> {
+        let Some(a) = anim else { return Ok(Duration::ZERO) };
+        let start = Instant::now();
+        tick += 1;
+        scene
+            .set_time(a.time_of(tick % a.frame_count()))
+            .map_err(|e| e.rendered)?;
+        Ok(start.elapsed())
+    };
     let (_, _, first) = frame(&mut gpu, &scene)?;
     let build = first.pipeline_build.map_or(0.0, ms);
     for _ in 0..a.warmup {
+        advance(&mut scene)?;
         frame(&mut gpu, &scene)?;
     }
     let mut gpu_ms = Vec::new();
     let mut wall_ms = Vec::new();
+    let mut rebuilt = 0;
     for _ in 0..a.frames {
+        let moved = advance(&mut scene)?;
         let (_, _, t) = frame(&mut gpu, &scene)?;
         if let Some(g) = t.gpu_ms() {
             gpu_ms.push(g);
         }
-        wall_ms.push(ms(t.wall));
+        rebuilt += usize::from(t.pipeline_build.is_some());
+        wall_ms.push(ms(t.wall + moved));
     }
     let cpu = (a.cpu > 0).then(|| {
         let times: Vec<f64> = (0..a.cpu)
@@ -138,7 +157,7 @@ fn run() -> Result<(), String> {
     let r = &scene.render;
     let fmt = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.3}"));
     println!(
-        "{}\t{}x{}\tkernel={}\tgpu_ms={}\twall_ms={:.3}\tcpu_ms={}\tbuild_ms={build:.0}\tadapter={}",
+        "{}\t{}x{}\tkernel={}\tgpu_ms={}\twall_ms={:.3}\tcpu_ms={}\tbuild_ms={build:.0}\tanimated={}\trebuilt={rebuilt}\tadapter={}",
         if a.label.is_empty() { &a.scene } else { &a.label },
         r.width,
         r.height,
@@ -146,6 +165,7 @@ fn run() -> Result<(), String> {
         fmt((!gpu_ms.is_empty()).then(|| median(gpu_ms.clone()))),
         median(wall_ms),
         fmt(cpu),
+        if anim.is_some() { "yes" } else { "no" },
         gpu.gpu().adapter_name()
     );
     if a.latency {

@@ -50,6 +50,9 @@ impl Animation {
     }
 }
 
+/// A track's keys: (time, value) pairs.
+pub(crate) type Keys = Vec<(f64, Vec<f64>)>;
+
 /// How a track fills the time between its keys.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Interpolation {

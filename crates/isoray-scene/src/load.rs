@@ -103,6 +103,7 @@ const TOP_KEYS: &[&str] = &[
     "track",
     "midi",
     "bone",
+    "skeleton",
     "camera",
     "render",
     "light",
@@ -291,10 +292,29 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         Some(v) => crate::animation::read_tracks(src, v)?,
         None => Vec::new(),
     };
-    let bones = match top.get("bone") {
+    let mut bones = match top.get("bone") {
         Some(v) => crate::skeleton::read_bones(src, v)?,
         None => Vec::new(),
     };
+    if let Some(v) = top.get("skeleton") {
+        if !bones.is_empty() {
+            return Err(src
+                .error(
+                    v.origin,
+                    "a scene's bones come from [[bone]] tables or from a [skeleton] glTF file, not both",
+                    Some("a second skeleton"),
+                    &[],
+                )
+                .with_key("skeleton"));
+        }
+        let dir = std::path::Path::new(&src.path)
+            .parent()
+            .map(std::path::Path::to_path_buf)
+            .unwrap_or_default();
+        let (b, t) = crate::skeleton::read_gltf_skeleton(src, v, &dir)?;
+        bones = b;
+        tracks.extend(t);
+    }
     let mut midi = match top.get("midi") {
         Some(v) => crate::midi::read_mappings(src, v)?,
         None => Vec::new(),

@@ -793,6 +793,7 @@ pub fn key_tables() -> Vec<(&'static str, &'static [KeySpec])> {
         ("### `[[track]]`", crate::animation::track_keys()),
         ("### `[[midi]]`", crate::midi::midi_keys()),
         ("### `[[bone]]`", crate::skeleton::bone_keys()),
+        ("### `[skeleton]`", crate::skeleton::skeleton_keys()),
     ]
 }
 

@@ -151,3 +151,84 @@ fn bad_bones_are_errors_at_their_place() {
         assert_eq!(e.line, Some(line), "{text}: {}", e.rendered);
     }
 }
+
+/// The ARM rig as a glTF file: two joints (shoulder, elbow) of a skin, and
+/// an animation "Bend" turning the elbow 90° about z over a second
+/// (quaternion keys, linear: a slerp), written as a .glb by hand.
+fn arm_glb() -> Vec<u8> {
+    let s45 = std::f32::consts::FRAC_1_SQRT_2;
+    let floats: [f32; 10] = [0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, s45, s45];
+    let bin: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let json = r#"{
+  "asset": {"version": "2.0"},
+  "scene": 0,
+  "scenes": [{"nodes": [2]}],
+  "nodes": [
+    {"name": "shoulder", "translation": [0.0, 1.5, 0.0], "children": [1]},
+    {"name": "elbow", "translation": [0.3, 0.0, 0.0]},
+    {"name": "rig", "children": [0]}
+  ],
+  "skins": [{"joints": [0, 1]}],
+  "buffers": [{"byteLength": 40}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 8}, {"buffer": 0, "byteOffset": 8, "byteLength": 32}],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0.0], "max": [1.0]},
+    {"bufferView": 1, "componentType": 5126, "count": 2, "type": "VEC4"}
+  ],
+  "animations": [{"name": "Bend",
+    "samplers": [{"input": 0, "output": 1, "interpolation": "LINEAR"}],
+    "channels": [{"sampler": 0, "target": {"node": 1, "path": "rotation"}}]}]
+}"#;
+    let mut j = json.as_bytes().to_vec();
+    while j.len() % 4 != 0 {
+        j.push(b' ');
+    }
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((12 + 8 + j.len() + 8 + bin.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(j.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0x4E4F_534Au32.to_le_bytes());
+    out.extend_from_slice(&j);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
+    out.extend_from_slice(&bin);
+    out
+}
+
+#[test]
+fn a_gltf_skin_and_animation_move_objects_as_the_same_rig_in_the_file() {
+    let dir = std::env::temp_dir().join(format!("isoray-gltf-rig-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("arm.glb"), arm_glb()).unwrap();
+    let text = "[skeleton]\ngltf = \"arm.glb\"\nanimation = \"Bend\"\nloop = false\n[[object]]\nbone = \"elbow\"\nshape = \"sphere(p - vec3(0.25, 0.0, 0.0), 0.05)\"\n";
+    let path = dir.join("rig.toml");
+    std::fs::write(&path, text).unwrap();
+    let mut from_gltf = isoray_scene::load(&path, &[]).unwrap_or_else(|e| panic!("{}", e.rendered));
+    assert_eq!(
+        from_gltf.bones.iter().map(|b| b.name.as_str()).collect::<Vec<_>>(),
+        ["shoulder", "elbow"]
+    );
+    let mut from_toml = scene(ARM);
+    for t in [0.0, 0.3, 0.5, 0.8, 1.0] {
+        from_gltf.set_time(t).unwrap();
+        from_toml.set_time(t).unwrap();
+        for q in [[0.55, 1.5, 0.0], [0.3, 1.75, 0.0], [0.45, 1.62, 0.0], [0.0, 0.0, 0.0]] {
+            let (a, b) = (from_gltf.distance(q), from_toml.distance(q));
+            assert!((a - b).abs() < 1e-6, "t = {t}, {q:?}: {a} vs {b}");
+        }
+    }
+    // Errors name the file and the place.
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "[skeleton]\ngltf = \"arm.glb\"\nanimation = \"Run\"\n").unwrap();
+    let e = isoray_scene::load(&bad, &[]).unwrap_err();
+    assert!(e.message.contains("no animation named \"Run\""), "{}", e.rendered);
+    assert!(e.notes.iter().any(|n| n.contains("Bend")), "{:?}", e.notes);
+    std::fs::write(&bad, "[skeleton]\ngltf = \"missing.glb\"\n").unwrap();
+    let e = isoray_scene::load(&bad, &[]).unwrap_err();
+    assert!(e.message.contains("cannot read") && e.io, "{}", e.rendered);
+    std::fs::write(&bad, "[skeleton]\ngltf = \"rig.toml\"\n").unwrap();
+    let e = isoray_scene::load(&bad, &[]).unwrap_err();
+    assert!(e.message.contains("not a glTF file"), "{}", e.rendered);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
