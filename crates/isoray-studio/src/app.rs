@@ -9,6 +9,7 @@ use isoray_scene::Scene;
 use isoray_shape::Value;
 
 pub mod playground;
+pub mod timeline;
 
 use crate::document::Document;
 use crate::graph::GraphEditor;
@@ -154,6 +155,8 @@ pub struct Studio {
     started: Instant,
     /// The preview panel on screen, in points.
     preview_rect: egui::Rect,
+    /// The timeline's time and play state (scenes with an `[animation]`).
+    timeline: timeline::Timeline,
     /// Preview size (pixels of the central panel, scaled).
     preview_size: (u32, u32),
     /// How long the last full-resolution frame took, ms.
@@ -238,6 +241,7 @@ impl Studio {
             screenshot_asked: false,
             started: Instant::now(),
             preview_rect: egui::Rect::NOTHING,
+            timeline: Default::default(),
             preview_size: (0, 0),
             full_frame_ms: 0.0,
             reduced: Default::default(),
@@ -296,6 +300,11 @@ impl Studio {
             }
             None => self.doc.scene().clone(),
         };
+        // The timeline's time: tracks, bones and expressions of t move,
+        // nothing is compiled.
+        if scene.animation.is_some() && scene.time().to_bits() != self.timeline.time.to_bits() {
+            let _ = scene.set_time(self.timeline.time);
+        }
         if let Some(o) = &self.orbit {
             o.apply(&mut scene.camera);
         }
@@ -334,7 +343,12 @@ impl Studio {
 
     /// True while a drag (camera or slider) is in progress.
     fn interacting(&self) -> bool {
-        self.orbit.is_some() || self.live.is_some() || self.live_vec.is_some() || self.slot_drag.is_some()
+        self.orbit.is_some()
+            || self.live.is_some()
+            || self.live_vec.is_some()
+            || self.slot_drag.is_some()
+            || self.timeline.playing
+            || self.timeline.scrubbing
     }
 
     /// Follows a drag of a node's value (`dragging`: the slot dragged this
@@ -1151,6 +1165,9 @@ impl Studio {
         ctx.send_viewport_cmd(egui::ViewportCommand::Title(self.title()));
         egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
         egui::Panel::bottom("status").show(ui, |ui| self.status_bar(ui));
+        if self.doc.scene().animation.is_some() {
+            egui::Panel::bottom("timeline").show(ui, |ui| self.timeline_panel(ui));
+        }
         if self.show_graph {
             egui::Panel::left("graph")
                 .default_size(560.0)

@@ -677,3 +677,47 @@ fn arrow_keys_over_the_preview_orbit_and_minus_zooms_out() {
     let out = camera_of(&h);
     assert!(distance(out.position, out.target) > d1 + 1e-3);
 }
+
+/// The value of the first parameter in the scene the preview draws.
+fn preview_param(h: &Harness<'_, Studio>) -> f64 {
+    match h.state().preview_scene().params[0].1 {
+        isoray_shape::Value::Float(x) => x,
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn the_timeline_plays_steps_and_jumps_to_keys_without_touching_the_file() {
+    let (_dir, path, original) = example_copy("tracks.toml");
+    let mut h = studio_on(&path);
+    let track = h.state().document().scene().tracks[0].clone();
+    assert_eq!(track.target, "params.r");
+    // Next frame: t = 1/4 (4 fps); the preview's scene is at that time.
+    h.get_by_label("Next frame").click();
+    h.run_steps(2);
+    assert_eq!(h.state().timeline().time, 0.25);
+    let scene = h.state().preview_scene();
+    assert_eq!(scene.time(), 0.25);
+    assert_eq!(preview_param(&h), track.sample(0.25).unwrap()[0]);
+    // A key's marker takes the time to the key.
+    h.get_by_label("params.r key 2").click();
+    h.run_steps(2);
+    assert_eq!(h.state().timeline().time, 1.0);
+    assert_eq!(preview_param(&h), 0.5, "the key's value");
+    // Play moves the time on; pause holds it; the file never changes.
+    h.get_by_label("Play").click();
+    h.run_steps(4);
+    let t = h.state().timeline();
+    assert!(t.playing && t.time != 1.0, "{t:?}");
+    h.get_by_label("Pause").click();
+    h.run_steps(1);
+    let held = h.state().timeline().time;
+    h.run_steps(3);
+    assert_eq!(h.state().timeline().time, held);
+    assert!(!h.state().timeline().playing);
+    h.get_by_label("Start").click();
+    h.run_steps(2);
+    assert_eq!(h.state().timeline().time, 0.0);
+    assert_eq!(h.state().document().text(), original);
+    assert!(!h.state().document().is_modified());
+}
