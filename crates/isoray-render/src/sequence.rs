@@ -95,7 +95,6 @@ pub struct SequenceWriter {
     width: u32,
     height: u32,
     sink: Sink,
-    written: u64,
 }
 
 enum Sink {
@@ -189,7 +188,6 @@ impl SequenceWriter {
             width,
             height,
             sink,
-            written: 0,
         })
     }
 
@@ -238,7 +236,6 @@ impl SequenceWriter {
                     .map_err(|e| fail(format!("ffmpeg stopped reading frames: {e}")))?;
             }
         }
-        self.written += 1;
         Ok(())
     }
 
@@ -271,11 +268,6 @@ impl SequenceWriter {
                 tmp.commit().map_err(|e| fail(e.to_string()))
             }
         }
-    }
-
-    /// How many frames were pushed.
-    pub fn written(&self) -> u64 {
-        self.written
     }
 }
 

@@ -587,7 +587,7 @@ pub(crate) fn apply_param_tracks(
     for tr in tracks {
         let Drive::Param { name, .. } = &tr.drive else { continue };
         if let Some(v) = tr.sample(time) {
-            let value = value_of(&v);
+            let value = isoray_shape::Value::from_components(&v);
             lib.set_param(name, value);
             if let Some(p) = params.iter_mut().find(|(n, _)| n == name) {
                 p.1 = value;
@@ -670,15 +670,6 @@ pub(crate) fn resolve_late(
         tr.drive = Drive::Value;
     }
     Ok(())
-}
-
-/// A parameter value from a track's components.
-pub(crate) fn value_of(v: &[f64]) -> isoray_shape::Value {
-    match *v {
-        [x, y] => isoray_shape::Value::Vec2([x, y]),
-        [x, y, z] => isoray_shape::Value::Vec3([x, y, z]),
-        _ => isoray_shape::Value::Float(v[0]),
-    }
 }
 
 impl Track {

@@ -79,7 +79,8 @@ impl MidiMapping {
     }
 
     /// A stand-in track of the mapping's two extreme values, resolved and
-    /// checked like a track's keys (mapping `index` in the file).
+    /// checked like a track's keys (mapping `index` in the file); it drives
+    /// what the mapping drives.
     pub(crate) fn probe(&self, index: usize) -> Track {
         let mut t = Track::new(
             &self.target,
@@ -90,6 +91,7 @@ impl MidiMapping {
         t.hold_first = false;
         t.origin = self.origin;
         t.label = format!("midi.{index}");
+        t.drive = self.drive.clone();
         t
     }
 

@@ -1258,11 +1258,7 @@ impl Scene {
                 value.ty()
             )));
         }
-        let comps: Vec<f64> = match value {
-            Value::Float(x) => vec![x],
-            Value::Vec2(a) => a.to_vec(),
-            Value::Vec3(a) => a.to_vec(),
-        };
+        let comps = value.components();
         if comps.iter().any(|x| !x.is_finite()) {
             return Err(crate::SceneError::usage(format!("parameter `{name}` must be finite")));
         }
@@ -1333,7 +1329,7 @@ impl Scene {
                     changed.push(k as u32);
                 }
             }
-            tracked_params.push((name.clone(), crate::animation::value_of(&v)));
+            tracked_params.push((name.clone(), Value::from_components(&v)));
         }
         let frames = bone_frames(&self.bones, self.all_tracks(), t);
         for (i, o) in self.objects.iter().enumerate() {
@@ -1429,16 +1425,7 @@ impl Scene {
     /// at the track), then applies them at the scene's time.
     pub(crate) fn start_tracks(&mut self) -> Result<(), crate::SceneError> {
         let src = &self.origin.sources;
-        let probes: Vec<crate::animation::Track> = self
-            .midi
-            .iter()
-            .enumerate()
-            .map(|(i, m)| {
-                let mut p = m.probe(i);
-                p.drive = m.drive.clone();
-                p
-            })
-            .collect();
+        let probes: Vec<crate::animation::Track> = self.midi.iter().enumerate().map(|(i, m)| m.probe(i)).collect();
         for tr in self.tracks.iter().chain(&probes) {
             if !matches!(tr.drive(), crate::animation::Drive::Value) {
                 continue;
@@ -1487,11 +1474,7 @@ impl Scene {
     fn own_value(&self, tr: &crate::animation::Track) -> Option<Vec<f64>> {
         use crate::animation::Drive;
         match tr.drive() {
-            Drive::Param { name, .. } => self.params.iter().find(|(n, _)| n == name).map(|(_, v)| match *v {
-                Value::Float(x) => vec![x],
-                Value::Vec2(a) => a.to_vec(),
-                Value::Vec3(a) => a.to_vec(),
-            }),
+            Drive::Param { name, .. } => self.params.iter().find(|(n, _)| n == name).map(|(_, v)| v.components()),
             Drive::Placement { object, first } => {
                 let tr_inputs = self.objects.get(*object)?.transform.as_ref()?.inputs as usize;
                 let at = tr_inputs + first;

@@ -124,6 +124,31 @@ impl Value {
         }
     }
 
+    /// Its numbers, in order.
+    ///
+    /// ```
+    /// use isoray_shape::Value;
+    /// assert_eq!(Value::Vec2([1.0, 2.0]).components(), vec![1.0, 2.0]);
+    /// assert_eq!(Value::from_components(&[1.0, 2.0]), Value::Vec2([1.0, 2.0]));
+    /// ```
+    pub fn components(&self) -> Vec<f64> {
+        match *self {
+            Value::Float(x) => vec![x],
+            Value::Vec2(a) => a.to_vec(),
+            Value::Vec3(a) => a.to_vec(),
+        }
+    }
+
+    /// The value of 2 or 3 numbers as a vector, otherwise of the first
+    /// number (0 for none).
+    pub fn from_components(v: &[f64]) -> Value {
+        match *v {
+            [x, y] => Value::Vec2([x, y]),
+            [x, y, z] => Value::Vec3([x, y, z]),
+            _ => Value::Float(v.first().copied().unwrap_or(0.0)),
+        }
+    }
+
     /// Its type.
     pub fn ty(&self) -> Type {
         match self {

@@ -230,19 +230,17 @@ pub(crate) fn render_frames(
             b.inc(1);
         }
     }
+    let (first, last) = (writer.path_of(frames.start), writer.path_of(frames.end - 1));
     writer.finish().map_err(|e| io_failure(e.to_string()))?;
     if let Some(b) = bar {
         b.finish_and_clear();
     }
     if !how.quiet {
         let secs = start.elapsed().as_secs_f64().max(1e-9);
-        let shown = match SequenceKind::of(outputs.png) {
-            Ok(SequenceKind::Pattern(_)) => format!(
-                "{} … {}",
-                writer_path(outputs.png, frames.start).display(),
-                writer_path(outputs.png, frames.end - 1).display()
-            ),
-            _ => outputs.png.display().to_string(),
+        let shown = if first == last {
+            first.display().to_string()
+        } else {
+            format!("{} … {}", first.display(), last.display())
         };
         eprintln!(
             "rendered {count} frame{} ({}..{}) of {w}x{h} on {backend} in {secs:.2} s: {:.2} frames/s -> {shown}",
@@ -255,12 +253,9 @@ pub(crate) fn render_frames(
     Ok(())
 }
 
-fn writer_path(pattern: &Path, n: u64) -> PathBuf {
-    frame_path(&pattern.to_string_lossy(), n)
-}
-
 /// Writes frame `n`'s AOVs to their numbered patterns.
 fn write_aovs(outputs: &Outputs, n: u64, image: &isoray_render::RenderedImage) -> Result<(), Failure> {
+    let writer_path = |pattern: &Path, n: u64| frame_path(&pattern.to_string_lossy(), n);
     let (w, h) = (image.width, image.height);
     let io = |r: Result<(), output::OutputError>| r.map_err(|e| io_failure(e.to_string()));
     if let (Some(p), Some(d)) = (outputs.depth, &image.depth) {

@@ -36,75 +36,66 @@ impl GpuSession {
 
     /// Renders one image of `scene`.
     pub(crate) fn render(&mut self, scene: &Scene, aovs: bool, how: &HowToRender) -> Result<Rendered, Failure> {
-        render_on(&mut self.renderer, &self.adapter, scene, aovs, how)
-    }
-}
-
-fn render_on(
-    renderer: &mut GpuRenderer,
-    adapter: &str,
-    scene: &Scene,
-    aovs: bool,
-    how: &HowToRender,
-) -> Result<Rendered, Failure> {
-    let (timing, quiet) = (how.timing, how.quiet);
-    let kernel = match how.gpu_kernel {
-        GpuKernel::Auto => None,
-        GpuKernel::Compiled => Some(Kernel::Compiled),
-        GpuKernel::Interpreted => Some(Kernel::Interpreted),
-    };
-    let start = Instant::now();
-    let progress = Arc::new(Counter::default());
-    let opts = GpuRenderOptions {
-        aovs,
-        progress: Some(progress.clone()),
-        cancel: Some(jobs::cancel_token()),
-        timing,
-        kernel,
-    };
-    let result = std::thread::scope(|sc| {
-        let handle = sc.spawn(|| renderer.render(scene, &opts));
-        if !quiet {
-            let total = isoray_gpu::band_count(scene, kernel, aovs);
-            crate::show_progress(&handle, &progress, total, start);
-        }
-        handle.join()
-    })
-    .map_err(|_| io_failure("the GPU renderer failed unexpectedly".into()))?;
-    let (image, stats, t) = result.map_err(gpu_failure)?;
-    if timing {
-        let ms = |d: Duration| d.as_secs_f64() * 1e3;
-        if let Some(k) = t.kernel {
-            eprintln!("timing: {} kernel", k.name());
-        }
-        match t.pipeline_build {
-            Some(d) => eprintln!("timing: pipeline built in {:.1} ms", ms(d)),
-            None => eprintln!("timing: pipeline reused"),
-        }
-        if t.passes_ms.is_empty() {
-            eprintln!(
-                "timing: the adapter has no timestamp queries; frame wall time {:.1} ms",
-                ms(t.wall)
-            );
-        } else {
-            for (i, p) in t.passes_ms.iter().enumerate() {
-                eprintln!("timing: pass trace[{i}] {p:.3} ms (GPU)");
+        let (renderer, adapter) = (&mut self.renderer, &self.adapter);
+        let (timing, quiet) = (how.timing, how.quiet);
+        let kernel = match how.gpu_kernel {
+            GpuKernel::Auto => None,
+            GpuKernel::Compiled => Some(Kernel::Compiled),
+            GpuKernel::Interpreted => Some(Kernel::Interpreted),
+        };
+        let start = Instant::now();
+        let progress = Arc::new(Counter::default());
+        let opts = GpuRenderOptions {
+            aovs,
+            progress: Some(progress.clone()),
+            cancel: Some(jobs::cancel_token()),
+            timing,
+            kernel,
+        };
+        let result = std::thread::scope(|sc| {
+            let handle = sc.spawn(|| renderer.render(scene, &opts));
+            if !quiet {
+                let total = isoray_gpu::band_count(scene, kernel, aovs);
+                crate::show_progress(&handle, &progress, total, start);
             }
-            eprintln!(
-                "timing: GPU {:.3} ms in {} pass{}, frame wall time {:.1} ms",
-                t.gpu_ms().unwrap_or(0.0),
-                t.passes_ms.len(),
-                if t.passes_ms.len() == 1 { "" } else { "es" },
-                ms(t.wall)
-            );
+            handle.join()
+        })
+        .map_err(|_| io_failure("the GPU renderer failed unexpectedly".into()))?;
+        let (image, stats, t) = result.map_err(gpu_failure)?;
+        if timing {
+            let ms = |d: Duration| d.as_secs_f64() * 1e3;
+            if let Some(k) = t.kernel {
+                eprintln!("timing: {} kernel", k.name());
+            }
+            match t.pipeline_build {
+                Some(d) => eprintln!("timing: pipeline built in {:.1} ms", ms(d)),
+                None => eprintln!("timing: pipeline reused"),
+            }
+            if t.passes_ms.is_empty() {
+                eprintln!(
+                    "timing: the adapter has no timestamp queries; frame wall time {:.1} ms",
+                    ms(t.wall)
+                );
+            } else {
+                for (i, p) in t.passes_ms.iter().enumerate() {
+                    eprintln!("timing: pass trace[{i}] {p:.3} ms (GPU)");
+                }
+                eprintln!(
+                    "timing: GPU {:.3} ms in {} pass{}, frame wall time {:.1} ms",
+                    t.gpu_ms().unwrap_or(0.0),
+                    t.passes_ms.len(),
+                    if t.passes_ms.len() == 1 { "" } else { "es" },
+                    ms(t.wall)
+                );
+            }
         }
+        Ok(Rendered {
+            image,
+            stats,
+            elapsed: start.elapsed().as_secs_f64(),
+            backend: format!("gpu {adapter}"),
+        })
     }
-    Ok(Rendered {
-        image,
-        stats,
-        elapsed: start.elapsed().as_secs_f64(),
-        backend: format!("gpu {adapter}"),
-    })
 }
 
 fn gpu_failure(e: GpuError) -> Failure {
