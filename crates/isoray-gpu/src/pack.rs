@@ -475,3 +475,83 @@ pub(crate) fn environment(scene: &Scene) -> Words {
     }
     out
 }
+
+/// Words of one mesh's record in [`meshes`].
+const MESH_RECORD: usize = 16;
+/// No vertex normals (a mesh record's normal base).
+const NO_NORMALS: u32 = u32::MAX;
+
+/// The scene's meshes as `render.wgsl`'s `mesh_data` reads them: the
+/// number of meshes; one 16-word record each (rotation quaternion x, y, z,
+/// w; translation; scale; node base, node count, triangle base, normal
+/// base or `u32::MAX`, material, 3 unused); then each mesh's nodes (8
+/// words: box min, escape index, box max, first triangle << 4 | count,
+/// count 0 for an interior node), triangles (9 floats, in leaf order) and
+/// vertex normals (9 floats a triangle, when the mesh has them). Bases are
+/// word offsets; a node's escape index is the node to visit after its
+/// subtree (the node count at the end), so the shader walks the tree
+/// without a stack.
+pub(crate) fn meshes(scene: &Scene) -> Words {
+    let mut out = Words::default();
+    out.u(scene.meshes.len() as u32);
+    let header = out.0.len();
+    out.0.resize(header + MESH_RECORD * scene.meshes.len(), 0);
+    for (k, m) in scene.meshes.iter().enumerate() {
+        let bvh = m.bvh();
+        let nodes = bvh.nodes();
+        // Escape indices: a left child escapes to its sibling, a right
+        // child to its parent's escape.
+        let mut escape = vec![nodes.len() as u32; nodes.len()];
+        for (i, n) in nodes.iter().enumerate() {
+            if n.count == 0 {
+                escape[i + 1] = n.index;
+                escape[n.index as usize] = escape[i];
+            }
+        }
+        let node_base = out.0.len() as u32;
+        for (n, esc) in nodes.iter().zip(&escape) {
+            let packed = if n.count == 0 { 0 } else { (n.index << 4) | n.count };
+            out.v3(n.min).u(*esc).v3(n.max).u(packed);
+        }
+        let tri_base = out.0.len() as u32;
+        for t in bvh.triangles() {
+            for c in t {
+                out.v3(*c);
+            }
+        }
+        let mesh = m.mesh();
+        let normal_base = if mesh.normals.is_empty() {
+            NO_NORMALS
+        } else {
+            let base = out.0.len() as u32;
+            for &i in bvh.order() {
+                for v in mesh.triangles[i as usize] {
+                    out.v3(mesh.normals[v as usize]);
+                }
+            }
+            base
+        };
+        let (q, shift, scale) = m.placement();
+        let r = header + MESH_RECORD * k;
+        let words = [
+            q[0].to_bits(),
+            q[1].to_bits(),
+            q[2].to_bits(),
+            q[3].to_bits(),
+            shift[0].to_bits(),
+            shift[1].to_bits(),
+            shift[2].to_bits(),
+            scale.to_bits(),
+            node_base,
+            nodes.len() as u32,
+            tri_base,
+            normal_base,
+            m.material as u32,
+            0,
+            0,
+            0,
+        ];
+        out.0[r..r + MESH_RECORD].copy_from_slice(&words);
+    }
+    out
+}

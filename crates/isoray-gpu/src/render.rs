@@ -21,7 +21,7 @@ use crate::pack::{self, Band, Kernel, SceneCode, Scratch, Words};
 use crate::{Gpu, GpuError};
 
 /// The tracer's bindings.
-const BINDINGS: usize = 10;
+const BINDINGS: usize = 11;
 
 /// Lanes (samples) per dispatch at most (bands of whole rows).
 const BAND_LANES: u64 = 1 << 18;
@@ -180,8 +180,8 @@ impl GpuRenderer {
         let write = wgpu::BufferBindingType::Storage { read_only: false };
         let uniform = wgpu::BufferBindingType::Uniform;
         // iso_in, settings, lights, materials, objects, environment, out,
-        // stats, programs, scratch.
-        let bindings = [read, uniform, read, read, read, read, write, write, read, write];
+        // stats, programs, scratch, meshes.
+        let bindings = [read, uniform, read, read, read, read, write, write, read, write, read];
         debug_assert_eq!(bindings.len(), BINDINGS);
         let (pipelines, layout) = self
             .gpu
@@ -285,6 +285,7 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let env = storage("environment", &pack::environment(scene));
+        let mesh_buf = storage("meshes", &pack::meshes(scene));
         let stats_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("stats"),
             contents: &[0u8; 48],
@@ -365,6 +366,7 @@ impl GpuRenderer {
                 &stats_buf,
                 &code_buf,
                 &scratch_buf,
+                &mesh_buf,
             ];
             let bind = self.bind_group(&program.layout, &buffers);
             let query = timestamps.then(|| Queries::new(device));

@@ -67,6 +67,8 @@ var<workgroup> wg_stats: array<atomic<u32>, 6>;
 // The lanes' scratch: ray stacks and interpreter registers (see ray_push).
 @group(0) @binding(9) var<storage, read_write> iso_regs: array<vec4<f32>>;
 var<private> iso_reg_base: u32;
+// The triangle meshes (`[[mesh]]`): see isoray-gpu's pack::meshes.
+@group(0) @binding(10) var<storage, read> mesh_data: array<u32>;
 
 const EMPTY: f32 = 1e9;
 const OFFSET: f32 = 10.0;
@@ -255,6 +257,102 @@ fn analytic_cap(o: vec3<f32>, d: vec3<f32>) -> f32 {
     return best;
 }
 
+// ---- triangle meshes (isoray-mesh's Bvh, isoray-render's meshes) ----
+const NO_MESH: u32 = 0xffffffffu;
+struct MeshHit { t: f32, mesh: u32, tri: u32, u: f32, v: f32 }
+
+fn mesh_f(i: u32) -> f32 { return bitcast<f32>(mesh_data[i]); }
+fn mesh_v3(i: u32) -> vec3<f32> { return vec3<f32>(mesh_f(i), mesh_f(i + 1u), mesh_f(i + 2u)); }
+fn min3(v: vec3<f32>) -> f32 { return min(min(v.x, v.y), v.z); }
+
+// q · v · q⁻¹ for a unit quaternion (glam's formula).
+fn quat_rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let b = q.xyz;
+    return v * (q.w * q.w - dot3(b, b)) + b * (dot3(v, b) * 2.0) + cross(b, v) * (q.w * 2.0);
+}
+
+fn mesh_quat(k: u32) -> vec4<f32> {
+    let b = 1u + 16u * k;
+    return vec4<f32>(mesh_f(b), mesh_f(b + 1u), mesh_f(b + 2u), mesh_f(b + 3u));
+}
+
+// The nearest triangle of any mesh on o + t·d with 0 < t < tmax (with
+// `any`, the first one found): each mesh's tree walked without a stack,
+// in the mesh's own coordinates (the same t).
+fn mesh_cast(o: vec3<f32>, d: vec3<f32>, tmax: f32, any: bool) -> MeshHit {
+    var best = MeshHit(tmax, NO_MESH, 0u, 0.0, 0.0);
+    let nm = mesh_data[0];
+    for (var k = 0u; k < nm; k++) {
+        let b = 1u + 16u * k;
+        let q = mesh_quat(k);
+        let qi = vec4<f32>(-q.xyz, q.w);
+        let s = 1.0 / mesh_f(b + 7u);
+        let lo = quat_rotate(qi, o - mesh_v3(b + 4u)) * s;
+        let ld = quat_rotate(qi, d) * s;
+        let inv = 1.0 / ld;
+        let node_base = mesh_data[b + 8u];
+        let node_count = mesh_data[b + 9u];
+        let tri_base = mesh_data[b + 10u];
+        var i = 0u;
+        loop {
+            if (i >= node_count) { break; }
+            let nb = node_base + 8u * i;
+            let t0 = (mesh_v3(nb) - lo) * inv;
+            let t1 = (mesh_v3(nb + 4u) - lo) * inv;
+            let near = max(max3(min(t0, t1)), 0.0);
+            let far = min(min3(max(t0, t1)), best.t);
+            let esc = mesh_data[nb + 3u];
+            if (!(near <= far)) { i = esc; continue; }
+            let packed = mesh_data[nb + 7u];
+            let count = packed & 15u;
+            if (count == 0u) { i += 1u; continue; }
+            let first = packed >> 4u;
+            for (var j = first; j < first + count; j++) {
+                // Möller–Trumbore, two-sided.
+                let tb = tri_base + 9u * j;
+                let a = mesh_v3(tb);
+                let e1 = mesh_v3(tb + 3u) - a;
+                let e2 = mesh_v3(tb + 6u) - a;
+                let p = cross(ld, e2);
+                let det = dot3(e1, p);
+                if (det == 0.0 || !(abs(det) < iso_inf())) { continue; }
+                let id = 1.0 / det;
+                let sv = lo - a;
+                let u = dot3(sv, p) * id;
+                if (!(u >= 0.0 && u <= 1.0)) { continue; }
+                let qv = cross(sv, e1);
+                let v = dot3(ld, qv) * id;
+                if (v < 0.0 || u + v > 1.0) { continue; }
+                let t = dot3(e2, qv) * id;
+                if (t > 0.0 && t < best.t) {
+                    best = MeshHit(t, k, j, u, v);
+                    if (any) { return best; }
+                }
+            }
+            i = esc;
+        }
+    }
+    return best;
+}
+
+// The world-space unit normal at a mesh hit: the vertex normals
+// interpolated, or the triangle's own.
+fn mesh_normal(h: MeshHit) -> vec3<f32> {
+    let b = 1u + 16u * h.mesh;
+    let nb = mesh_data[b + 11u];
+    var n = vec3<f32>(0.0);
+    if (nb != 0xffffffffu) {
+        let c = nb + 9u * h.tri;
+        n = normalize_or_zero(mesh_v3(c) * (1.0 - h.u - h.v) + mesh_v3(c + 3u) * h.u + mesh_v3(c + 6u) * h.v);
+    }
+    if (n.x == 0.0 && n.y == 0.0 && n.z == 0.0) {
+        let tb = mesh_data[b + 10u] + 9u * h.tri;
+        let a = mesh_v3(tb);
+        n = normalize_or_zero(cross(mesh_v3(tb + 3u) - a, mesh_v3(tb + 6u) - a));
+    }
+    return quat_rotate(mesh_quat(h.mesh), n);
+}
+
 // ---- sphere tracing (isoray-render's sphere_trace_capped) ----
 struct Hit { t: f32, steps: u32 }
 
@@ -296,7 +394,7 @@ fn sphere_trace(kind: u32, o: vec3<f32>, dir: vec3<f32>, cap: f32) -> Hit {
 }
 
 // A traced ray: its hit, and at a hit the point and the normal facing the ray.
-struct Traced { t: f32, steps: u32, p: vec3<f32>, n: vec3<f32>, gnorm: f32 }
+struct Traced { t: f32, steps: u32, p: vec3<f32>, n: vec3<f32>, gnorm: f32, mesh: u32 }
 
 fn trace(o: vec3<f32>, d: vec3<f32>, inside: bool) -> Traced {
     // One call of each (the GPU compiler inlines every call of a field).
@@ -308,9 +406,26 @@ fn trace(o: vec3<f32>, d: vec3<f32>, inside: bool) -> Traced {
         kind = F_REST;
         cap = analytic_cap(o, d);
     }
+    // The nearest triangle caps the march too.
+    var mh = MeshHit(iso_inf(), NO_MESH, 0u, 0.0, 0.0);
+    if (mesh_data[0] > 0u) {
+        mh = mesh_cast(o, d, iso_inf(), false);
+        cap = iso_min(cap, mh.t);
+    }
     let h = sphere_trace(kind, o, d, cap);
-    var r = Traced(h.t, h.steps, vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
+    var r = Traced(h.t, h.steps, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, NO_MESH);
     if (!(abs(h.t) < iso_inf())) { return r; }
+    if (mh.mesh != NO_MESH && h.t >= mh.t - cfg.hit_eps && mh.t <= cap) {
+        // The march stopped at a triangle: a hit on the mesh, exactly there.
+        r.t = mh.t;
+        r.p = o + d * mh.t;
+        r.mesh = mh.mesh;
+        r.gnorm = 1.0;
+        var n = mesh_normal(mh);
+        if (dot3(n, d) > 0.0) { n = -n; }
+        r.n = n;
+        return r;
+    }
     r.p = o + d * h.t;
     // Inside, the field is unsigned: normals from dual numbers.
     var gkind = F_SCENE;
@@ -418,7 +533,11 @@ fn interface_transmittance(m: Mat) -> vec3<f32> {
     return vec3<f32>(m.transparency) * (vec3<f32>(1.0) - m.reflectivity);
 }
 
-fn object_mat(i: u32) -> Mat { return mats[objs[i].material]; }
+// Object i's material; i past the objects is mesh i − n_objects.
+fn object_mat(i: u32) -> Mat {
+    if (i >= cfg.n_objects) { return mats[mesh_data[1u + 16u * (i - cfg.n_objects) + 12u]]; }
+    return mats[objs[i].material];
+}
 
 // The transparent object whose surface is nearest p.
 fn nearest_clear(p: vec3<f32>) -> u32 {
@@ -612,6 +731,17 @@ fn material_at(p: vec3<f32>, unsigned: bool) -> Surface {
     let own = object_mat(obj);
     if (own.checker_other != NO_CHECKER && checker_odd(p, own.checker_size)) {
         out = mats[own.checker_other];
+    }
+    return Surface(out, obj);
+}
+
+// A mesh's material at p (its checker applied), and its object index
+// after the objects'.
+fn mesh_surface(k: u32, p: vec3<f32>) -> Surface {
+    let obj = cfg.n_objects + k;
+    var out = object_mat(obj);
+    if (out.checker_other != NO_CHECKER && checker_odd(p, out.checker_size)) {
+        out = mats[out.checker_other];
     }
     return Surface(out, obj);
 }
@@ -831,6 +961,10 @@ fn shade(p: vec3<f32>, n: vec3<f32>, dir: vec3<f32>, s: Mat, local: vec3<f32>, m
             let o = p + n * (2.0 * cfg.hit_eps);
             let tmax = min(inc.dist, cfg.shadow_max_dist);
             var vis = shadow_march(occluders, o, l, tmax, mode, light.size);
+            // Meshes block what reaches them (hard shadows).
+            if (mode != SH_NONE && vis > 0.0 && mesh_data[0] > 0u) {
+                if (mesh_cast(o, l, tmax, true).mesh != NO_MESH) { vis = 0.0; }
+            }
             var through = vec3<f32>(1.0);
             if (cfg.n_clear > 0u && cfg.shadows != SH_NONE && vis > 0.0) {
                 through = transmission(o, l, tmax, media);
@@ -934,7 +1068,12 @@ fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult
             if (!inside) { sum += ray.w * sky(ray.d); }
             continue;
         }
-        let surf = material_at(h.p, inside);
+        var surf: Surface;
+        if (h.mesh != NO_MESH) {
+            surf = mesh_surface(h.mesh, h.p);
+        } else {
+            surf = material_at(h.p, inside);
+        }
         if (first) {
             res.albedo = surf.m.diffuse;
             return res;

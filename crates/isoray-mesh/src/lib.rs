@@ -19,6 +19,7 @@
 //! assert!(stats.max_error < 1e-3);
 //! ```
 
+pub mod bvh;
 pub mod check;
 mod contour;
 mod extract;

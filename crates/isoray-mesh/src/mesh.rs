@@ -86,6 +86,46 @@ impl MeshMaterial {
 }
 
 impl Mesh {
+    /// A UV sphere of radius `r` about the origin: `rings` bands from pole
+    /// to pole (y up), `segments` around, wound outwards, with the exact
+    /// unit normals at the vertices. For tests and examples.
+    ///
+    /// ```
+    /// let m = isoray_mesh::Mesh::uv_sphere(1.0, 32, 64);
+    /// assert!(m.topology().is_closed_manifold());
+    /// assert!((m.volume() - 4.0 / 3.0 * std::f64::consts::PI).abs() < 0.03);
+    /// ```
+    pub fn uv_sphere(r: f32, rings: u32, segments: u32) -> Mesh {
+        let mut m = Mesh::default();
+        m.positions.push([0.0, r, 0.0]);
+        m.normals.push([0.0, 1.0, 0.0]);
+        for i in 1..rings {
+            let th = std::f64::consts::PI * i as f64 / rings as f64;
+            for j in 0..segments {
+                let ph = std::f64::consts::TAU * j as f64 / segments as f64;
+                let n = [th.sin() * ph.cos(), th.cos(), -th.sin() * ph.sin()].map(|x| x as f32);
+                m.positions.push(n.map(|x| r * x));
+                m.normals.push(n);
+            }
+        }
+        m.positions.push([0.0, -r, 0.0]);
+        m.normals.push([0.0, -1.0, 0.0]);
+        let south = m.positions.len() as u32 - 1;
+        let at = |i: u32, j: u32| 1 + (i - 1) * segments + j % segments;
+        for j in 0..segments {
+            m.triangles.push([0, at(1, j), at(1, j + 1)]);
+            m.triangles.push([south, at(rings - 1, j + 1), at(rings - 1, j)]);
+        }
+        for i in 1..rings - 1 {
+            for j in 0..segments {
+                let (a, b, c, d) = (at(i, j), at(i, j + 1), at(i + 1, j), at(i + 1, j + 1));
+                m.triangles.push([a, c, b]);
+                m.triangles.push([b, c, d]);
+            }
+        }
+        m
+    }
+
     /// Appends `part`'s vertices and triangles, with `material` for its
     /// triangles (materials equal to one already listed are shared).
     pub fn append(&mut self, part: Mesh, material: Option<MeshMaterial>) {

@@ -29,6 +29,7 @@
 
 pub mod bounds;
 pub mod camera;
+pub mod meshes;
 pub mod output;
 pub mod sequence;
 pub mod tiles;
@@ -478,7 +479,11 @@ fn block_grid(x0: u32, y0: u32, tw: u32, th: u32, n: u32) -> Vec<(u32, u32)> {
 struct Ctx<'s> {
     scene: &'s Scene,
     cam: RayCamera,
+    /// The surface of each object, then of each mesh (object index
+    /// `objects.len() + m` is mesh m).
     surfaces: Vec<MaterialSample>,
+    /// The material index of each object, then of each mesh.
+    material_of: Vec<usize>,
     /// Every material as a surface, by material index (for checkers).
     material_surfaces: Vec<MaterialSample>,
     gradient: GradientMode,
@@ -493,16 +498,22 @@ impl<'s> Ctx<'s> {
             NormalMethod::Tetrahedron => GradientMode::Tetrahedron(h),
             NormalMethod::Analytic => GradientMode::Dual,
         };
-        let surfaces = scene
+        let material_of: Vec<usize> = scene
             .objects
             .iter()
-            .map(|o| MaterialSample::from(&scene.materials[o.material]))
+            .map(|o| o.material)
+            .chain(scene.meshes.iter().map(|m| m.material))
+            .collect();
+        let surfaces = material_of
+            .iter()
+            .map(|&m| MaterialSample::from(&scene.materials[m]))
             .collect();
         let material_surfaces = scene.materials.iter().map(MaterialSample::from).collect();
         Ctx {
             scene,
             cam,
             surfaces,
+            material_of,
             material_surfaces,
             gradient,
         }
@@ -543,6 +554,8 @@ struct HitSet {
     nz: Vec<f32>,
     /// The gradient's norm before normalising (the gradient view).
     gnorm: Vec<f32>,
+    /// Per hit, the mesh it is on (None: an object of the field).
+    mesh: Vec<Option<u32>>,
 }
 
 impl<'s> Worker<'s> {
@@ -580,34 +593,56 @@ impl<'s> Worker<'s> {
     /// `inside` objects trace the unsigned distance to the nearest surface.
     fn trace_and_normals(&mut self, ctx: &Ctx, inside: bool) -> (HitSet, u64) {
         let s = &ctx.scene.render;
-        let mut evals = match (&mut self.rest_eval, inside) {
-            (Some(rest), false) => {
-                // Planes and spheres in closed form; the other objects marched up to them.
-                self.caps.clear();
-                for i in 0..self.rays.len() {
-                    let o = [self.rays.ox[i], self.rays.oy[i], self.rays.oz[i]];
-                    let d = [self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]];
-                    let t = ctx
-                        .scene
+        // Meshes first: the nearest triangle of each ray caps its march.
+        let mesh_hits = meshes::closest_hits(&ctx.scene.meshes, &self.rays);
+        let rest = if inside { None } else { self.rest_eval.as_mut() };
+        let mut evals = if rest.is_some() || !ctx.scene.meshes.is_empty() {
+            // Planes and spheres in closed form, and meshes; the other
+            // objects marched up to the nearest of them.
+            self.caps.clear();
+            for i in 0..self.rays.len() {
+                let o = [self.rays.ox[i], self.rays.oy[i], self.rays.oz[i]];
+                let d = [self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]];
+                let analytic = if rest.is_some() {
+                    ctx.scene
                         .derived()
                         .analytic
                         .iter()
                         .flatten()
                         .map(|a| a.intersect(o, d)[0])
-                        .fold(f32::INFINITY, f32::min);
-                    self.caps.push(t);
-                }
-                sphere_trace_capped(rest, &self.rays, s, &mut self.scratch, &mut self.hits, Some(&self.caps))
-            }
-            _ => {
-                let ev = if inside {
-                    &mut self.surf_eval
+                        .fold(f32::INFINITY, f32::min)
                 } else {
-                    &mut self.scene_eval
+                    f32::INFINITY
                 };
-                sphere_trace(ev, &self.rays, s, &mut self.scratch, &mut self.hits)
+                let mesh = mesh_hits.get(i).and_then(|h| h.map(|h| h.t)).unwrap_or(f32::INFINITY);
+                self.caps.push(analytic.min(mesh));
             }
+            let ev = match rest {
+                Some(rest) => rest,
+                None if inside => &mut self.surf_eval,
+                None => &mut self.scene_eval,
+            };
+            sphere_trace_capped(ev, &self.rays, s, &mut self.scratch, &mut self.hits, Some(&self.caps))
+        } else {
+            let ev = if inside {
+                &mut self.surf_eval
+            } else {
+                &mut self.scene_eval
+            };
+            sphere_trace(ev, &self.rays, s, &mut self.scratch, &mut self.hits)
         };
+        // A march that stopped at a mesh's triangle is a hit on the mesh,
+        // exactly where the triangle is.
+        let eps = s.hit_epsilon as f32;
+        let mut on_mesh: Vec<Option<meshes::MeshHit>> = vec![None; self.rays.len()];
+        for (i, h) in self.hits.iter_mut().enumerate() {
+            if let Some(Some(mh)) = mesh_hits.get(i) {
+                if h.t.is_finite() && h.t >= mh.t - eps && mh.t <= self.caps[i] {
+                    h.t = mh.t;
+                    on_mesh[i] = Some(*mh);
+                }
+            }
+        }
         let mut hs = HitSet::default();
         for (i, h) in self.hits.iter().enumerate() {
             if h.t.is_finite() {
@@ -615,6 +650,7 @@ impl<'s> Worker<'s> {
                 hs.px.push(self.rays.ox[i] + self.rays.dx[i] * h.t);
                 hs.py.push(self.rays.oy[i] + self.rays.dy[i] * h.t);
                 hs.pz.push(self.rays.oz[i] + self.rays.dz[i] * h.t);
+                hs.mesh.push(on_mesh[i].map(|m| m.mesh));
             }
         }
         let m = hs.idx.len();
@@ -633,6 +669,10 @@ impl<'s> Worker<'s> {
         evals += m as u64 * gradient_cost(mode);
         hs.gnorm.clear();
         for k in 0..m {
+            if let Some(mh) = on_mesh[hs.idx[k]] {
+                let n = meshes::normal(&ctx.scene.meshes, &mh);
+                (hs.nx[k], hs.ny[k], hs.nz[k]) = (n[0], n[1], n[2]);
+            }
             let g = Vec3::new(hs.nx[k], hs.ny[k], hs.nz[k]);
             hs.gnorm.push(g.length());
             let n = g.normalize_or_zero();
@@ -932,6 +972,10 @@ impl<'s> Worker<'s> {
                 &mut self.scratch,
                 &mut vis,
             );
+            // Meshes block what reaches them (hard shadows).
+            if mode != ShadowMode::None {
+                meshes::occlude(&scene.meshes, &shadow_rays, &tmax, &mut vis);
+            }
             // Transparent objects transmit along the rays the opaque ones let through.
             let transmitted = if self.shadow_evals.is_some() && s.shadows != ShadowMode::None {
                 let open: Vec<usize> = (0..vis.len()).filter(|&r| vis[r] > 0.0).collect();
@@ -1000,9 +1044,13 @@ impl<'s> Worker<'s> {
         unsigned: bool,
     ) -> (Vec<MaterialSample>, Vec<usize>) {
         let m = hs.idx.len();
+        if m == 0 {
+            return (Vec::new(), Vec::new());
+        }
         if self.object_evals.is_empty() {
-            let obj = vec![0; m];
+            let mut obj = vec![0; m];
             let mut out = vec![ctx.surfaces[0]; m];
+            Self::mesh_materials(ctx, hs, &mut obj, &mut out);
             self.apply_checkers(ctx, hs, &obj, &mut out);
             return (out, obj);
         }
@@ -1039,15 +1087,27 @@ impl<'s> Worker<'s> {
                 }
             }
         }
+        Self::mesh_materials(ctx, hs, &mut obj, &mut out);
         self.apply_checkers(ctx, hs, &obj, &mut out);
         (out, obj)
+    }
+
+    /// Hits on meshes take the mesh's material (and its object index,
+    /// after the objects').
+    fn mesh_materials(ctx: &Ctx, hs: &HitSet, obj: &mut [usize], out: &mut [MaterialSample]) {
+        for (q, mesh) in hs.mesh.iter().enumerate() {
+            if let Some(k) = mesh {
+                obj[q] = ctx.scene.objects.len() + *k as usize;
+                out[q] = ctx.surfaces[obj[q]];
+            }
+        }
     }
 
     /// Objects whose material is a checker take the other material in odd cells.
     fn apply_checkers(&self, ctx: &Ctx, hs: &HitSet, obj: &[usize], out: &mut [MaterialSample]) {
         let scene = ctx.scene;
         for (q, &o) in obj.iter().enumerate() {
-            let material = &scene.materials[scene.objects[o].material];
+            let material = &scene.materials[ctx.material_of[o]];
             if let Some(other) = checker(material, Vec3::new(hs.px[q], hs.py[q], hs.pz[q])) {
                 out[q] = ctx.material_surfaces[other];
             }

@@ -97,8 +97,16 @@ struct Inner {
     map: HashMap<String, Vec<Arc<Fragment>>>,
     /// The functions each shape text calls.
     called: HashMap<String, Vec<String>>,
+    /// Mesh files read, by path, modification time and length.
+    meshes: HashMap<MeshKey, Arc<crate::meshes::LoadedMesh>>,
     stats: CacheStats,
 }
+
+/// A mesh file as the cache knows it: path, modification time, length.
+type MeshKey = (std::path::PathBuf, Option<std::time::SystemTime>, u64);
+
+/// The most mesh files a cache keeps.
+const MESH_FILES: usize = 16;
 
 /// The most fragments kept per key (values of bound inputs).
 const VARIANTS: usize = 16;
@@ -142,6 +150,32 @@ impl ObjectCache {
     /// The functions `text` calls, if the cache has seen it.
     pub(crate) fn called(&self, text: &str) -> Option<Vec<String>> {
         self.0.lock().ok()?.called.get(text).cloned()
+    }
+
+    /// The mesh file at `path` with its hierarchy, read by `read` unless
+    /// the cache holds it unchanged (same modification time and length).
+    pub(crate) fn mesh(
+        &self,
+        path: &std::path::Path,
+        read: impl FnOnce() -> Result<crate::meshes::LoadedMesh, String>,
+    ) -> Result<Arc<crate::meshes::LoadedMesh>, String> {
+        let meta = std::fs::metadata(path).ok();
+        let key: MeshKey = (
+            path.to_path_buf(),
+            meta.as_ref().and_then(|m| m.modified().ok()),
+            meta.as_ref().map_or(0, |m| m.len()),
+        );
+        if let Some(hit) = self.0.lock().ok().and_then(|m| m.meshes.get(&key).cloned()) {
+            return Ok(hit);
+        }
+        let loaded = Arc::new(read()?);
+        if let Ok(mut m) = self.0.lock() {
+            if m.meshes.len() >= MESH_FILES {
+                m.meshes.clear();
+            }
+            m.meshes.insert(key, loaded.clone());
+        }
+        Ok(loaded)
     }
 
     /// Remembers the functions `text` calls.

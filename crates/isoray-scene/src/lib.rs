@@ -30,6 +30,7 @@ pub mod doc;
 pub mod env;
 mod error;
 mod load;
+pub mod meshes;
 pub mod midi;
 mod model;
 mod read;

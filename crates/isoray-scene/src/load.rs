@@ -110,6 +110,7 @@ const TOP_KEYS: &[&str] = &[
     "material",
     "surface",
     "object",
+    "mesh",
     "params",
     "environment",
     // isoray-studio's own table (the node graph's layout): never read here.
@@ -347,6 +348,11 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     let cache = options.objects.clone().unwrap_or_default();
     let mut objects = b.read_objects(top.get("object"), &materials, &cache, &placed, &bones)?;
     crate::animation::resolve_late(src, root, &mut tracks, objects.len(), &b.driven)?;
+    let scene_dir = std::path::Path::new(&src.path)
+        .parent()
+        .map(std::path::Path::to_path_buf)
+        .unwrap_or_default();
+    let meshes = crate::meshes::read_meshes(src, top.get("mesh"), &materials, &scene_dir, &cache)?;
     let probes = tracks.split_off(file_tracks);
     for (m, p) in midi.iter_mut().zip(&probes) {
         m.drive = p.drive.clone();
@@ -386,6 +392,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         lights,
         materials,
         objects,
+        meshes,
         params,
         shape,
         derived,

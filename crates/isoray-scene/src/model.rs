@@ -789,6 +789,7 @@ pub fn key_tables() -> Vec<(&'static str, &'static [KeySpec])> {
         ("### `[material.NAME]`", material_keys()),
         ("### `[surface.NAME]`", surface_keys()),
         ("### `[[object]]`", object_keys()),
+        ("### `[[mesh]]`", crate::meshes::mesh_keys()),
         ("### `[animation]`", crate::animation::animation_keys()),
         ("### `[[track]]`", crate::animation::track_keys()),
         ("### `[[midi]]`", crate::midi::midi_keys()),
@@ -918,6 +919,9 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Objects in file order.
     pub objects: Vec<Object>,
+    /// Triangle meshes (`[[mesh]]`) in file order: drawn with the objects,
+    /// not part of [`Scene::shape`].
+    pub meshes: Vec<crate::meshes::MeshObject>,
     /// The scene's named parameters (`[params]`).
     pub params: Vec<(String, Value)>,
     /// The whole scene's distance: the union (or smooth union) of the objects.

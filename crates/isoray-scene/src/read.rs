@@ -965,7 +965,13 @@ fn fresnel_setting(r: &mut Reader, keys: &[KeySpec]) -> Result<Fresnel> {
 }
 
 /// The index of a named material, or an error at `loc` naming the defined ones.
-fn material_index(src: &Sources, materials: &[Material], m: &str, loc: &Located, ctx: &str) -> Result<usize> {
+pub(crate) fn material_index(
+    src: &Sources,
+    materials: &[Material],
+    m: &str,
+    loc: &Located,
+    ctx: &str,
+) -> Result<usize> {
     if let Some(k) = materials.iter().position(|x| x.name == m) {
         return Ok(k);
     }
