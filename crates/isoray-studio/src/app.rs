@@ -157,6 +157,8 @@ pub struct Studio {
     preview_rect: egui::Rect,
     /// The timeline's time and play state (scenes with an `[animation]`).
     timeline: timeline::Timeline,
+    /// A key being dragged in the timeline's curve editor.
+    curve_drag: Option<timeline::CurveDrag>,
     /// Preview size (pixels of the central panel, scaled).
     preview_size: (u32, u32),
     /// How long the last full-resolution frame took, ms.
@@ -242,6 +244,7 @@ impl Studio {
             started: Instant::now(),
             preview_rect: egui::Rect::NOTHING,
             timeline: Default::default(),
+            curve_drag: None,
             preview_size: (0, 0),
             full_frame_ms: 0.0,
             reduced: Default::default(),

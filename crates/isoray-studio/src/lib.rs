@@ -11,6 +11,7 @@
 #![allow(clippy::result_large_err)]
 
 pub mod app;
+pub mod curves;
 pub mod document;
 pub mod export;
 pub mod graph;

@@ -721,3 +721,98 @@ fn the_timeline_plays_steps_and_jumps_to_keys_without_touching_the_file() {
     assert_eq!(h.state().document().text(), original);
     assert!(!h.state().document().is_modified());
 }
+
+/// `clicks` presses and releases of `button` at `pos` (the harness runs
+/// a frame, 1/4 s, per event).
+fn click_at(h: &mut Harness<'_, Studio>, pos: egui::Pos2, button: egui::PointerButton, clicks: usize) {
+    for _ in 0..clicks {
+        for pressed in [true, false] {
+            h.event(egui::Event::PointerButton {
+                pos,
+                button,
+                pressed,
+                modifiers: egui::Modifiers::default(),
+            });
+        }
+    }
+    h.step();
+}
+
+/// The keys of the scene's first track.
+fn first_track_keys(h: &Harness<'_, Studio>) -> Vec<(f64, Vec<f64>)> {
+    h.state().document().scene().tracks[0].keys.clone()
+}
+
+#[test]
+fn track_keys_are_dragged_added_and_deleted_on_the_curves_one_undo_step_each() {
+    let (_dir, path, original) = example_copy("tracks.toml");
+    let mut h = studio_sized(&path, egui::Vec2::new(1100.0, 800.0));
+    // The harness runs 1/4 s per event: a double click's four events
+    // take more than egui's 0.3 s.
+    h.ctx.options_mut(|o| o.input_options.max_double_click_delay = 2.0);
+    let before = first_track_keys(&h);
+    h.get_by_label("params.r track").click();
+    h.run_steps(2);
+    // Drag key 1 (t = 0.5, r = 0.9) right and up.
+    let key = h.get_by_label("params.r curve key 1").rect().center();
+    h.hover_at(key);
+    h.run_steps(1);
+    h.drag_at(key);
+    h.run_steps(1);
+    h.hover_at(key + egui::vec2(15.0, -10.0));
+    h.run_steps(1);
+    assert_eq!(h.state().document().text(), original, "nothing written while dragging");
+    h.hover_at(key + egui::vec2(30.0, -20.0));
+    h.run_steps(1);
+    h.drop_at(key + egui::vec2(30.0, -20.0));
+    h.run_steps(2);
+    let moved = first_track_keys(&h);
+    assert_eq!(moved.len(), before.len());
+    assert!(moved[1].0 > before[1].0 && moved[1].1[0] > before[1].1[0], "{moved:?}");
+    assert!(moved[1].0 < moved[2].0, "times stay increasing");
+    assert_eq!((&moved[0], &moved[2], &moved[3]), (&before[0], &before[2], &before[3]));
+    // The file holds exactly the track's new keys, written as `isoray set` would.
+    let edit = isoray_studio::curves::keys_edit(0, &moved);
+    assert_eq!(h.state().document().text(), set(&original, &[edit.as_str()]));
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().document().text(), original, "one undo step");
+    // Double-click the curves between keys 2 and 3: a key on the curve.
+    let area = h.get_by_label("params.r curves").rect();
+    let x = area.left() + 6.0 + (area.width() - 12.0) * (1.25 / 1.5) as f32;
+    let p = egui::pos2(x, area.center().y);
+    h.hover_at(p);
+    h.run_steps(1);
+    click_at(&mut h, p, egui::PointerButton::Primary, 2);
+    h.run_steps(2);
+    let added = first_track_keys(&h);
+    assert_eq!(added.len(), before.len() + 1, "{added:?}");
+    assert!((added[3].0 - 1.25).abs() < 0.01, "{added:?}");
+    // Right-click the new key: deleted again, the keys as they were.
+    let new_key = h.get_by_label("params.r curve key 3").rect().center();
+    h.hover_at(new_key);
+    h.run_steps(1);
+    click_at(&mut h, new_key, egui::PointerButton::Secondary, 1);
+    h.run_steps(2);
+    assert_eq!(first_track_keys(&h), before);
+    // Undo twice: the added key comes back, then the original file.
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(first_track_keys(&h).len(), before.len() + 1);
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().document().text(), original);
+}
+
+#[test]
+#[ignore = "writes a picture of the timeline's curve editor to $ISORAY_SHOT for a person to look at"]
+fn picture_of_the_curve_editor() {
+    // $ISORAY_SHOT_TRACK: the track's label (object.1.position by default).
+    let track = std::env::var("ISORAY_SHOT_TRACK").unwrap_or_else(|_| "object.1.position".into());
+    let (_dir, path, _) = example_copy("tracks.toml");
+    let mut h = studio_sized(&path, egui::Vec2::new(1400.0, 900.0));
+    h.get_by_label(&format!("{track} track")).click();
+    settle(&mut h, 3000);
+    let img = h.render().unwrap();
+    img.save(std::env::var("ISORAY_SHOT").unwrap()).unwrap();
+}
