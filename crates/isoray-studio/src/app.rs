@@ -8,6 +8,7 @@ use eframe::egui;
 use isoray_scene::Scene;
 use isoray_shape::Value;
 
+mod midi_menu;
 pub mod playground;
 pub mod timeline;
 
@@ -159,6 +160,12 @@ pub struct Studio {
     timeline: timeline::Timeline,
     /// A key being dragged in the timeline's curve editor.
     curve_drag: Option<timeline::CurveDrag>,
+    /// Live MIDI input, learn and recording.
+    midi: crate::midi::MidiLive,
+    /// The last MIDI take written.
+    last_take: Option<std::path::PathBuf>,
+    /// The slider MIDI learn just mapped, until its button is released.
+    learn_hold: Option<String>,
     /// Preview size (pixels of the central panel, scaled).
     preview_size: (u32, u32),
     /// How long the last full-resolution frame took, ms.
@@ -245,6 +252,9 @@ impl Studio {
             preview_rect: egui::Rect::NOTHING,
             timeline: Default::default(),
             curve_drag: None,
+            midi: Default::default(),
+            last_take: None,
+            learn_hold: None,
             preview_size: (0, 0),
             full_frame_ms: 0.0,
             reduced: Default::default(),
@@ -308,6 +318,8 @@ impl Studio {
         if scene.animation.is_some() && scene.time().to_bits() != self.timeline.time.to_bits() {
             let _ = scene.set_time(self.timeline.time);
         }
+        // Live MIDI values (runtime inputs, like the time).
+        self.midi.apply(&mut scene);
         if let Some(o) = &self.orbit {
             o.apply(&mut scene.camera);
         }
@@ -496,6 +508,7 @@ impl Studio {
                 ui.checkbox(&mut self.show_graph, "Graph");
                 ui.checkbox(&mut self.graph.thumbs.enabled, "Node thumbnails");
             });
+            self.midi_menu(ui);
             ui.menu_button("Edit", |ui| {
                 if ui
                     .add_enabled(self.doc.can_undo(), egui::Button::new("Undo  (Ctrl+Z)"))
@@ -983,6 +996,7 @@ impl Studio {
             if let Some(e) = self.preview.error() {
                 ui.colored_label(egui::Color32::RED, e);
             }
+            self.midi_status(ui);
             if let Some(x) = &self.export {
                 match x.end() {
                     Some(end) => {
@@ -1161,6 +1175,7 @@ impl Studio {
             self.request_preview();
         }
         self.shortcuts(ctx);
+        self.poll_midi(ctx);
         if ctx.input(|i| i.viewport().close_requested()) && !self.allow_close && self.doc.is_modified() {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
             self.confirm = Some(Pending::Close);

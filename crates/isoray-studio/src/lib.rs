@@ -15,6 +15,7 @@ pub mod curves;
 pub mod document;
 pub mod export;
 pub mod graph;
+pub mod midi;
 pub mod orbit;
 pub mod preview;
 pub mod surfaces;

@@ -816,3 +816,80 @@ fn picture_of_the_curve_editor() {
     let img = h.render().unwrap();
     img.save(std::env::var("ISORAY_SHOT").unwrap()).unwrap();
 }
+
+/// Sends raw MIDI bytes to the studio as its input port would.
+fn send_midi(h: &mut Harness<'_, Studio>, bytes: &[u8]) {
+    h.state()
+        .midi()
+        .sender()
+        .send((std::time::Instant::now(), bytes.to_vec()))
+        .unwrap();
+    h.run_steps(2);
+}
+
+/// The preview's value of parameter `name`.
+fn preview_value(h: &Harness<'_, Studio>, name: &str) -> f64 {
+    let scene = h.state().preview_scene();
+    match scene.params.iter().find(|(n, _)| n == name).unwrap().1 {
+        isoray_shape::Value::Float(x) => x,
+        ref other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn midi_learn_maps_the_last_control_to_the_clicked_slider_and_a_take_is_recorded() {
+    let (dir, path, original) = example_copy("placement.toml");
+    let mut h = studio_sized(&path, egui::Vec2::new(1100.0, 800.0));
+    h.get_by_label("MIDI").click();
+    h.run_steps(1);
+    h.get_by_label("MIDI learn").click();
+    h.run_steps(1);
+    assert!(h.state().midi().learning());
+    // Turn a knob: CC 21 on channel 2 (status 0xB1).
+    send_midi(&mut h, &[0xB1, 21, 30]);
+    h.get_by_label("params.speed").click();
+    h.run_steps(2);
+    let scene = h.state().document().scene().clone();
+    assert_eq!(scene.midi.len(), 1, "{}", h.state().document().text());
+    let m = &scene.midi[0];
+    assert_eq!(
+        (m.source, m.channel, m.target.as_str(), m.range),
+        (isoray_scene::midi::Source::Cc(21), Some(2), "params.speed", [-1.0, 2.0])
+    );
+    assert!(!h.state().midi().learning());
+    // The knob now moves the parameter in the preview, not in the file.
+    send_midi(&mut h, &[0xB1, 21, 127]);
+    assert_eq!(preview_value(&h, "speed"), 2.0);
+    send_midi(&mut h, &[0xB1, 21, 0]);
+    assert_eq!(preview_value(&h, "speed"), -1.0);
+    // Another channel is not heard.
+    send_midi(&mut h, &[0xB0, 21, 127]);
+    assert_eq!(preview_value(&h, "speed"), -1.0);
+    // Record a take of a ramp; it is written beside the scene.
+    h.get_by_label("MIDI").click();
+    h.run_steps(1);
+    h.get_by_label("Record take").click();
+    h.run_steps(1);
+    for v in [10u8, 64, 120] {
+        send_midi(&mut h, &[0xB1, 21, v]);
+    }
+    h.get_by_label("MIDI").click();
+    h.run_steps(1);
+    h.get_by_label("Stop recording").click();
+    h.run_steps(1);
+    let take = dir.path().join("scene-take-1.mid");
+    let events = isoray_scene::midi::read_midi_file(&take).unwrap();
+    let values: Vec<u8> = events
+        .iter()
+        .filter_map(|e| match e.kind {
+            isoray_scene::midi::Message::Cc { value, .. } => Some(value),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(values, [10, 64, 120]);
+    // One undo (Edit menu) removes the learned mapping.
+    // One undo removes the learned mapping (the click that learned wrote nothing).
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().document().text(), original);
+}

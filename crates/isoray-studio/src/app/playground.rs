@@ -88,8 +88,12 @@ impl Studio {
             Some((k, x)) if k == key => *x,
             _ => value,
         };
+        let bounds = [*range.start(), *range.end()];
         let r = ui.add(egui::Slider::new(&mut v, range).clamping(clamping).text(label));
         named(&r, egui::WidgetType::Slider, key);
+        if self.learn_on(&r, key, bounds) {
+            return r;
+        }
         if r.changed() {
             self.live = Some((key.to_string(), v));
             self.request_preview();
