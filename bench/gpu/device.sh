@@ -6,6 +6,12 @@
 # median GPU time (timestamp queries) of 100 frames after 10 warm-up
 # frames, and prints one table beside the thesis's GTX 1070 figures.
 #   bash bench/gpu/device.sh            (FRAMES=100 WARMUP=10 by default)
+# A machine without Rust (the device tool's): build here with
+#   cargo build --release -p isoray-gpu --example frames
+#   cargo build --release -p isoray-studio --example latency
+# copy both binaries into an ignored folder that travels (.devbin/), and
+# there run: cp .devbin/* target/release/examples/ && NO_BUILD=1 bash bench/gpu/device.sh
+# (with the Vulkan loader unpacked first; see the device tool's README).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 source bench/gpu/effects.sh
@@ -13,6 +19,7 @@ export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 FRAMES="${FRAMES:-100}"
 WARMUP="${WARMUP:-10}"
 if [ ! -x target/release/examples/frames ] || [ -z "${NO_BUILD:-}" ]; then
+  command -v cargo >/dev/null || { echo "no cargo here: build the frames example elsewhere and set NO_BUILD=1" >&2; exit 1; }
   cargo build --release -q -p isoray-gpu --example frames
 fi
 F=target/release/examples/frames
