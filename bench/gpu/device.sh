@@ -7,9 +7,10 @@
 # frames, and prints one table beside the thesis's GTX 1070 figures.
 #   bash bench/gpu/device.sh            (FRAMES=100 WARMUP=10 by default)
 # A machine without Rust (the device tool's): build here with
-#   cargo build --release -p isoray-gpu --example frames
+#   cargo build --release -p isoray-gpu --example gpu_frames
 #   cargo build --release -p isoray-studio --example latency
-# copy both binaries into an ignored folder that travels (.devbin/), and
+#   cargo build --release -p isoray
+# copy the three binaries into an ignored folder that travels (.devbin/), and
 # there run: cp .devbin/* target/release/examples/ && NO_BUILD=1 bash bench/gpu/device.sh
 # (with the Vulkan loader unpacked first; see the device tool's README).
 set -euo pipefail
@@ -18,11 +19,11 @@ source bench/gpu/effects.sh
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 FRAMES="${FRAMES:-100}"
 WARMUP="${WARMUP:-10}"
-if [ ! -x target/release/examples/frames ] || [ -z "${NO_BUILD:-}" ]; then
-  command -v cargo >/dev/null || { echo "no cargo here: build the frames example elsewhere and set NO_BUILD=1" >&2; exit 1; }
-  cargo build --release -q -p isoray-gpu --example frames
+if [ ! -x target/release/examples/gpu_frames ] || [ -z "${NO_BUILD:-}" ]; then
+  command -v cargo >/dev/null || { echo "no cargo here: build the gpu_frames example elsewhere and set NO_BUILD=1" >&2; exit 1; }
+  cargo build --release -q -p isoray-gpu --example gpu_frames
 fi
-F=target/release/examples/frames
+F=target/release/examples/gpu_frames
 command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version --format=csv,noheader || true
 # The thesis's Test 1-4 figures for Primitives (ms, whole Unity frames on a GTX 1070, D3D11).
 declare -A THESIS=(
@@ -60,6 +61,11 @@ for size in 640x480 800x600 1280x720 1280x1024 1600x1024; do
   row Character - "$size" examples/realtime/character.toml
 done
 row "stress: 1,000 primitives on 200 bones" - 1920x1080 bench/gpu/stress-bones.toml
+# Meshes inside an SDF scene: the raster prepass for the primary rays
+# against walking the meshes' trees for them.
+row "meshes (raster prepass)" - 1920x1080 examples/meshes.toml
+row "meshes (tree walk)" - 1920x1080 examples/meshes.toml --walk-meshes
+NO_BUILD=1 bash bench/gpu/meshes.sh 1920x1080 20 || echo "bench/gpu/meshes.sh failed (is the isoray binary there?)"
 "$F" examples/realtime/primitives.toml --size 1280x720 --frames 10 --warmup 2 --latency | grep latency
 # The studio's latencies on this GPU (the same measures as on lavapipe).
 bash bench/studio/latency.sh

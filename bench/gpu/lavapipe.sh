@@ -9,8 +9,8 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 source bench/gpu/effects.sh
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-cargo build --release -q -p isoray-gpu --example frames
-F=target/release/examples/frames
+cargo build --release -q -p isoray-gpu --example gpu_frames
+F=target/release/examples/gpu_frames
 N="${FRAMES:-5}"
 echo "# $(nproc) cores; $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)"
 "$F" examples/showcase.toml --size 640x480 --frames "$N" --warmup 1 --cpu "$N" --latency --label showcase

@@ -26,7 +26,7 @@ pub enum GpuError {
 }
 
 /// Storage buffers the tracer binds in one shader.
-const STORAGE_BUFFERS: u32 = 10;
+const STORAGE_BUFFERS: u32 = 11;
 
 /// A GPU device and its queue, with the adapter's description.
 pub struct Gpu {
@@ -60,7 +60,7 @@ impl Gpu {
         let info = adapter.get_info();
         // Timestamp queries time the passes where the adapter has them.
         let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
-        // The tracer binds ten storage buffers (WebGPU's default allows 8;
+        // The tracer binds eleven storage buffers (WebGPU's default allows 8;
         // every Vulkan driver has more).
         let have = adapter.limits();
         if have.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS {

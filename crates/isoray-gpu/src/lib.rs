@@ -17,6 +17,7 @@ pub mod accuracy;
 mod device;
 mod pack;
 mod points;
+mod raster;
 mod render;
 
 pub use device::{Gpu, GpuError};

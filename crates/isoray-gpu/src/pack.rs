@@ -14,7 +14,7 @@ use isoray_shape::wgsl::{
 };
 
 /// Words of `Settings` in `render.wgsl`.
-pub(crate) const SETTINGS_WORDS: usize = 72;
+pub(crate) const SETTINGS_WORDS: usize = 76;
 /// Words of one `Light`.
 const LIGHT_WORDS: usize = 20;
 /// Words of one `Mat`.
@@ -292,8 +292,10 @@ impl Scratch {
     }
 }
 
-/// The `Settings` buffer for one band of the image.
-pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch) -> Words {
+/// The `Settings` buffer for one band of the image; `raster` is the row
+/// stride (words) of the meshes' raster prepass ids when the primary rays
+/// read them (see `raster`).
+pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch, raster: Option<u32>) -> Words {
     let record = if aovs { RECORD_AOVS } else { RECORD_COLOUR };
     let r = &scene.render;
     let c = &scene.camera;
@@ -388,6 +390,7 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch) 
         .f(r.fixed_step as f32)
         .u(aa_pattern)
         .f(r.shadow_epsilon as f32);
+    out.u(raster.is_some() as u32).u(raster.unwrap_or(0)).u(0).u(0);
     debug_assert_eq!(out.0.len(), SETTINGS_WORDS);
     out
 }
@@ -484,7 +487,7 @@ const NO_NORMALS: u32 = u32::MAX;
 /// The scene's meshes as `render.wgsl`'s `mesh_data` reads them: the
 /// number of meshes; one 16-word record each (rotation quaternion x, y, z,
 /// w; translation; scale; node base, node count, triangle base, normal
-/// base or `u32::MAX`, material, 3 unused); then each mesh's nodes (8
+/// base or `u32::MAX`, material, triangle count, 2 unused); then each mesh's nodes (8
 /// words: box min, escape index, box max, first triangle << 4 | count,
 /// count 0 for an interior node), triangles (9 floats, in leaf order) and
 /// vertex normals (9 floats a triangle, when the mesh has them). Bases are
@@ -547,7 +550,7 @@ pub(crate) fn meshes(scene: &Scene) -> Words {
             tri_base,
             normal_base,
             m.material as u32,
-            0,
+            bvh.triangles().len() as u32,
             0,
             0,
         ];

@@ -18,10 +18,11 @@ use isoray_scene::Scene;
 use wgpu::util::DeviceExt;
 
 use crate::pack::{self, Band, Kernel, SceneCode, Scratch, Words};
+use crate::raster::{self, MeshRaster};
 use crate::{Gpu, GpuError};
 
 /// The tracer's bindings.
-const BINDINGS: usize = 11;
+const BINDINGS: usize = 12;
 
 /// Lanes (samples) per dispatch at most (bands of whole rows).
 const BAND_LANES: u64 = 1 << 18;
@@ -61,6 +62,9 @@ pub struct GpuRenderOptions {
     pub timing: bool,
     /// The kernel; None chooses ([`Kernel::choose`]).
     pub kernel: Option<Kernel>,
+    /// Walk the meshes' trees for the primary rays too, instead of
+    /// reading the raster prepass (for comparisons).
+    pub no_mesh_raster: bool,
 }
 
 /// What a frame cost.
@@ -76,6 +80,9 @@ pub struct GpuTiming {
     pub wall: Duration,
     /// The kernel that drew it.
     pub kernel: Option<Kernel>,
+    /// Whether the primary rays read the meshes' raster prepass (the
+    /// scene has meshes and its primary rays lie on the grid it samples).
+    pub mesh_raster: bool,
 }
 
 impl GpuTiming {
@@ -106,6 +113,8 @@ fn tapes_of(scene: &Scene) -> Vec<isoray_shape::Tape> {
 pub struct GpuRenderer {
     gpu: Gpu,
     program: Option<Program>,
+    /// The meshes' raster prepass, built at the first scene that has one.
+    raster: Option<MeshRaster>,
 }
 
 impl std::fmt::Debug for GpuRenderer {
@@ -125,7 +134,11 @@ impl GpuRenderer {
 
     /// A renderer on `gpu`.
     pub fn with_gpu(gpu: Gpu) -> GpuRenderer {
-        GpuRenderer { gpu, program: None }
+        GpuRenderer {
+            gpu,
+            program: None,
+            raster: None,
+        }
     }
 
     /// The device.
@@ -180,8 +193,10 @@ impl GpuRenderer {
         let write = wgpu::BufferBindingType::Storage { read_only: false };
         let uniform = wgpu::BufferBindingType::Uniform;
         // iso_in, settings, lights, materials, objects, environment, out,
-        // stats, programs, scratch, meshes.
-        let bindings = [read, uniform, read, read, read, read, write, write, read, write, read];
+        // stats, programs, scratch, meshes, the meshes' raster ids.
+        let bindings = [
+            read, uniform, read, read, read, read, write, write, read, write, read, read,
+        ];
         debug_assert_eq!(bindings.len(), BINDINGS);
         let (pipelines, layout) = self
             .gpu
@@ -263,6 +278,10 @@ impl GpuRenderer {
         let start = Instant::now();
         let kernel = opts.kernel.unwrap_or_else(|| Kernel::choose(scene));
         let pipeline_build = self.prepare(scene, kernel)?;
+        let grid = raster::grid(scene).filter(|_| !opts.no_mesh_raster);
+        if grid.is_some() && self.raster.is_none() {
+            self.raster = Some(MeshRaster::new(&self.gpu)?);
+        }
         let program = self.program.as_ref().expect("prepared");
         let gpu = &self.gpu;
         let device = &gpu.device;
@@ -286,12 +305,37 @@ impl GpuRenderer {
         });
         let env = storage("environment", &pack::environment(scene));
         let mesh_buf = storage("meshes", &pack::meshes(scene));
+        let timestamps = opts.timing && device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let mut passes_ms = Vec::new();
+        // The meshes' raster prepass, ahead of the bands on the same queue.
+        let mut ids = None;
+        if let (Some(size), Some(prepass)) = (grid, &self.raster) {
+            let query = timestamps.then(|| Queries::new(device));
+            let mut enc = device.create_command_encoder(&Default::default());
+            let writes = query.as_ref().map(|q| wgpu::RenderPassTimestampWrites {
+                query_set: &q.set,
+                beginning_of_pass_write_index: Some(0),
+                end_of_pass_write_index: Some(1),
+            });
+            ids = prepass.encode(gpu, &mut enc, scene, &mesh_buf, size, writes);
+            if let Some(q) = &query {
+                q.resolve(&mut enc);
+            }
+            let submission = gpu.queue.submit([enc.finish()]);
+            if let Some(q) = &query {
+                gpu.wait(submission)?;
+                passes_ms.push(q.elapsed_ms(gpu)?);
+            }
+        }
+        let ids_buf = match &ids {
+            Some(r) => r.buffer.clone(),
+            None => storage("no mesh ids", &Words(vec![0])),
+        };
         let stats_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("stats"),
             contents: &[0u8; 48],
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         });
-        let timestamps = opts.timing && device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let scratch = Scratch::of(scene, kernel, opts.aovs);
         // A row's lanes are one dispatch dimension, 8 lanes per workgroup.
         let max_groups = device.limits().max_compute_workgroups_per_dimension as u64;
@@ -332,14 +376,13 @@ impl GpuRenderer {
             normals: opts.aovs.then(|| vec![[0.0; 3]; n]),
             albedo: opts.aovs.then(|| vec![[0.0; 3]; n]),
         };
-        let mut passes_ms = Vec::new();
         for (bi, band) in bands.iter().enumerate() {
             if opts.cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
                 return Err(GpuError::Cancelled);
             }
             let cfg = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("settings"),
-                contents: &pack::settings(scene, *band, opts.aovs, scratch).bytes(),
+                contents: &pack::settings(scene, *band, opts.aovs, scratch, ids.as_ref().map(|r| r.stride)).bytes(),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
             let size = (band.width as usize * band.height as usize * record * 4) as u64;
@@ -367,6 +410,7 @@ impl GpuRenderer {
                 &code_buf,
                 &scratch_buf,
                 &mesh_buf,
+                &ids_buf,
             ];
             let bind = self.bind_group(&program.layout, &buffers);
             let query = timestamps.then(|| Queries::new(device));
@@ -417,6 +461,7 @@ impl GpuRenderer {
             passes_ms,
             wall: start.elapsed(),
             kernel: Some(kernel),
+            mesh_raster: ids.is_some(),
         };
         Ok((image, stats, timing))
     }

@@ -25,6 +25,7 @@ struct Settings {
     step_limit_miss: u32, shadow_floor: f32, shadow_all: u32, ao_uniform: u32,
     ao_all: u32, amb_r: f32, amb_g: f32, amb_b: f32,
     fixed_march: u32, fixed_step: f32, aa_pattern: u32, shadow_eps: f32,
+    raster: u32, raster_stride: u32, pad0: u32, pad1: u32,
 }
 
 struct Light {
@@ -69,6 +70,14 @@ var<workgroup> wg_stats: array<atomic<u32>, 6>;
 var<private> iso_reg_base: u32;
 // The triangle meshes (`[[mesh]]`): see isoray-gpu's pack::meshes.
 @group(0) @binding(10) var<storage, read> mesh_data: array<u32>;
+// The meshes' raster prepass (isoray-gpu's raster): per primary sample of
+// the supersampled grid, 0 or (mesh + 1) << 24 | triangle, with
+// `cfg.raster_stride` words a row; a one-word buffer when `cfg.raster` is 0.
+@group(0) @binding(11) var<storage, read> raster_ids: array<u32>;
+// The prepass's texel (column, row) of the ray `trace` is about to follow
+// (the primary ray of the lane's sample), or NO_TEXEL in x: the trees are walked.
+const NO_TEXEL: u32 = 0xffffffffu;
+var<private> primary_texel: vec2<u32> = vec2<u32>(NO_TEXEL, 0u);
 
 const EMPTY: f32 = 1e9;
 const OFFSET: f32 = 10.0;
@@ -276,6 +285,35 @@ fn mesh_quat(k: u32) -> vec4<f32> {
     return vec4<f32>(mesh_f(b), mesh_f(b + 1u), mesh_f(b + 2u), mesh_f(b + 3u));
 }
 
+// Möller–Trumbore, two-sided: (t, u, v) where the ray lo + t·ld meets
+// the triangle at word tb of mesh_data, t = -1 where it does not.
+fn tri_hit(tb: u32, lo: vec3<f32>, ld: vec3<f32>) -> vec3<f32> {
+    let miss = vec3<f32>(-1.0, 0.0, 0.0);
+    let a = mesh_v3(tb);
+    let e1 = mesh_v3(tb + 3u) - a;
+    let e2 = mesh_v3(tb + 6u) - a;
+    let p = cross(ld, e2);
+    let det = dot3(e1, p);
+    if (det == 0.0 || !(abs(det) < iso_inf())) { return miss; }
+    let id = 1.0 / det;
+    let sv = lo - a;
+    let u = dot3(sv, p) * id;
+    if (!(u >= 0.0 && u <= 1.0)) { return miss; }
+    let qv = cross(sv, e1);
+    let v = dot3(ld, qv) * id;
+    if (v < 0.0 || u + v > 1.0) { return miss; }
+    return vec3<f32>(dot3(e2, qv) * id, u, v);
+}
+
+// The ray o + t·d in mesh k's own coordinates (the same t): origin, direction.
+fn mesh_local_ray(k: u32, o: vec3<f32>, d: vec3<f32>) -> array<vec3<f32>, 2> {
+    let b = 1u + 16u * k;
+    let q = mesh_quat(k);
+    let qi = vec4<f32>(-q.xyz, q.w);
+    let s = 1.0 / mesh_f(b + 7u);
+    return array<vec3<f32>, 2>(quat_rotate(qi, o - mesh_v3(b + 4u)) * s, quat_rotate(qi, d) * s);
+}
+
 // The nearest triangle of any mesh on o + t·d with 0 < t < tmax (with
 // `any`, the first one found): each mesh's tree walked without a stack,
 // in the mesh's own coordinates (the same t).
@@ -284,11 +322,9 @@ fn mesh_cast(o: vec3<f32>, d: vec3<f32>, tmax: f32, any: bool) -> MeshHit {
     let nm = mesh_data[0];
     for (var k = 0u; k < nm; k++) {
         let b = 1u + 16u * k;
-        let q = mesh_quat(k);
-        let qi = vec4<f32>(-q.xyz, q.w);
-        let s = 1.0 / mesh_f(b + 7u);
-        let lo = quat_rotate(qi, o - mesh_v3(b + 4u)) * s;
-        let ld = quat_rotate(qi, d) * s;
+        let local = mesh_local_ray(k, o, d);
+        let lo = local[0];
+        let ld = local[1];
         let inv = 1.0 / ld;
         let node_base = mesh_data[b + 8u];
         let node_count = mesh_data[b + 9u];
@@ -308,30 +344,50 @@ fn mesh_cast(o: vec3<f32>, d: vec3<f32>, tmax: f32, any: bool) -> MeshHit {
             if (count == 0u) { i += 1u; continue; }
             let first = packed >> 4u;
             for (var j = first; j < first + count; j++) {
-                // Möller–Trumbore, two-sided.
-                let tb = tri_base + 9u * j;
-                let a = mesh_v3(tb);
-                let e1 = mesh_v3(tb + 3u) - a;
-                let e2 = mesh_v3(tb + 6u) - a;
-                let p = cross(ld, e2);
-                let det = dot3(e1, p);
-                if (det == 0.0 || !(abs(det) < iso_inf())) { continue; }
-                let id = 1.0 / det;
-                let sv = lo - a;
-                let u = dot3(sv, p) * id;
-                if (!(u >= 0.0 && u <= 1.0)) { continue; }
-                let qv = cross(sv, e1);
-                let v = dot3(ld, qv) * id;
-                if (v < 0.0 || u + v > 1.0) { continue; }
-                let t = dot3(e2, qv) * id;
-                if (t > 0.0 && t < best.t) {
-                    best = MeshHit(t, k, j, u, v);
+                let tuv = tri_hit(tri_base + 9u * j, lo, ld);
+                if (tuv.x > 0.0 && tuv.x < best.t) {
+                    best = MeshHit(tuv.x, k, j, tuv.y, tuv.z);
                     if (any) { return best; }
                 }
             }
             i = esc;
         }
     }
+    return best;
+}
+
+// The primary ray's mesh hit from the raster prepass: the triangles the
+// rasteriser kept at `texel` and its four neighbours, each intersected
+// exactly (the t the tree walk finds), the nearest hit; none where no
+// triangle covers them. The neighbours catch the samples a rasteriser
+// (which snaps corners to a sub-pixel grid) leaves to the triangle behind
+// an edge; where the rasteriser covered a texel but no exact test hits
+// (an edge), the trees are walked.
+fn raster_hit(o: vec3<f32>, d: vec3<f32>, texel: vec2<u32>) -> MeshHit {
+    var best = MeshHit(iso_inf(), NO_MESH, 0u, 0.0, 0.0);
+    var covered = false;
+    let gw = cfg.width * cfg.aa;
+    let gh = cfg.height * cfg.aa;
+    var ids = array<u32, 5>(0u, 0u, 0u, 0u, 0u);
+    ids[0] = raster_ids[texel.y * cfg.raster_stride + texel.x];
+    if (texel.x > 0u) { ids[1] = raster_ids[texel.y * cfg.raster_stride + texel.x - 1u]; }
+    if (texel.x + 1u < gw) { ids[2] = raster_ids[texel.y * cfg.raster_stride + texel.x + 1u]; }
+    if (texel.y > 0u) { ids[3] = raster_ids[(texel.y - 1u) * cfg.raster_stride + texel.x]; }
+    if (texel.y + 1u < gh) { ids[4] = raster_ids[(texel.y + 1u) * cfg.raster_stride + texel.x]; }
+    for (var i = 0u; i < 5u; i++) {
+        let id = ids[i];
+        if (id == 0u) { continue; }
+        covered = true;
+        var seen = false;
+        for (var j = 0u; j < i; j++) { seen = seen || ids[j] == id; }
+        if (seen) { continue; }
+        let k = (id >> 24u) - 1u;
+        let tri = id & 0xffffffu;
+        let local = mesh_local_ray(k, o, d);
+        let tuv = tri_hit(mesh_data[1u + 16u * k + 10u] + 9u * tri, local[0], local[1]);
+        if (tuv.x > 0.0 && tuv.x < best.t) { best = MeshHit(tuv.x, k, tri, tuv.y, tuv.z); }
+    }
+    if (best.mesh == NO_MESH && covered) { return mesh_cast(o, d, iso_inf(), false); }
     return best;
 }
 
@@ -409,9 +465,14 @@ fn trace(o: vec3<f32>, d: vec3<f32>, inside: bool) -> Traced {
     // The nearest triangle caps the march too.
     var mh = MeshHit(iso_inf(), NO_MESH, 0u, 0.0, 0.0);
     if (mesh_data[0] > 0u) {
-        mh = mesh_cast(o, d, iso_inf(), false);
+        if (primary_texel.x != NO_TEXEL) {
+            mh = raster_hit(o, d, primary_texel);
+        } else {
+            mh = mesh_cast(o, d, iso_inf(), false);
+        }
         cap = iso_min(cap, mh.t);
     }
+    primary_texel.x = NO_TEXEL;
     let h = sphere_trace(kind, o, d, cap);
     var r = Traced(h.t, h.steps, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, NO_MESH);
     if (!(abs(h.t) < iso_inf())) { return r; }
@@ -1250,6 +1311,15 @@ fn render_sample(x: u32, y: u32, k: u32, base: u32) -> vec3<f32> {
         fy = f32(y) + off.y;
     }
     let d = camera_dir(fx, fy);
+    // The prepass's texel of this ray: a sample of the grid, or the
+    // centre ray where it is the middle sample (aa odd).
+    if (cfg.raster != 0u) {
+        if (sample) {
+            primary_texel = vec2<u32>(x * aa + sx, y * aa + sy);
+        } else if (aa % 2u == 1u) {
+            primary_texel = vec2<u32>(x * aa + aa / 2u, y * aa + aa / 2u);
+        }
+    }
     let index = (((y - ty) * tw + (x - tx)) * aa + sy) * aa + sx;
     let first = !sample || cfg.view != V_SHADED;
     let r = trace_path(origin, d, hash(tile_seed ^ index), first);

@@ -127,3 +127,53 @@ fn meshes_draw_as_on_the_cpu_with_shadows_both_ways() {
         "sphere: mesh vs SDF mean {mean}/255, 99th percentile {p99}/255"
     );
 }
+
+/// The share of pixels whose colours differ by more than 2/255.
+fn share_differing(a: &RenderedImage, b: &RenderedImage) -> f64 {
+    let (a, b) = (to_srgb8(&a.color), to_srgb8(&b.color));
+    let n = a
+        .chunks(3)
+        .zip(b.chunks(3))
+        .filter(|(x, y)| x.iter().zip(*y).any(|(p, q)| p.abs_diff(*q) > 2))
+        .count();
+    n as f64 / (a.len() / 3) as f64
+}
+
+#[test]
+fn the_raster_prepass_serves_grid_primary_rays_and_matches_the_tree_walk() {
+    let d = dir();
+    let mut gpu = GpuRenderer::new().unwrap_or_else(|e| panic!("{e}"));
+    // A mesh ball in front of, and partly behind, an SDF ball, on an SDF floor.
+    let body = "[[object]]\nshape = \"p.y\"\nmaterial = \"grey\"\n\
+                [[object]]\nshape = \"sphere(p, 0.45)\"\nposition = [0.7, 0.9, 0.3]\nmaterial = \"red\"\n\
+                [[mesh]]\nfile = \"sphere.obj\"\nposition = [0.0, 1.0, 0.0]\nscale = 0.6\nmaterial = \"red\"\n";
+    scene(&d, "raster.toml", body);
+    for (aa, pattern, rastered) in [
+        (1, "grid", true),
+        (2, "grid", true),
+        (3, "grid", true),
+        (2, "jittered", false),
+    ] {
+        let sets = [format!("render.aa={aa}"), format!("render.aa_pattern=\"{pattern}\"")];
+        let s = isoray_scene::load(&d.join("raster.toml"), &sets).unwrap_or_else(|e| panic!("{e}"));
+        let opts = |walk| GpuRenderOptions {
+            aovs: true,
+            no_mesh_raster: walk,
+            ..Default::default()
+        };
+        let (prepass, _, timing) = gpu.render(&s, &opts(false)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(timing.mesh_raster, rastered, "aa {aa} {pattern}");
+        let (walked, _, timing) = gpu.render(&s, &opts(true)).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!timing.mesh_raster);
+        // The same triangles, intersected by the same test: at most a
+        // few samples on triangle edges differ.
+        let share = share_differing(&prepass, &walked);
+        assert!(
+            share < 0.002,
+            "aa {aa} {pattern}: {:.3}% of pixels differ",
+            100.0 * share
+        );
+        let hits = |img: &RenderedImage| img.depth.as_ref().unwrap().iter().filter(|t| t.is_finite()).count();
+        assert_eq!(hits(&prepass), hits(&walked), "aa {aa} {pattern}: centre rays that hit");
+    }
+}

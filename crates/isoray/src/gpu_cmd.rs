@@ -51,6 +51,7 @@ impl GpuSession {
             cancel: Some(jobs::cancel_token()),
             timing,
             kernel,
+            ..Default::default()
         };
         let result = std::thread::scope(|sc| {
             let handle = sc.spawn(|| renderer.render(scene, &opts));

@@ -2,6 +2,7 @@
 
 mod algebra_cmd;
 mod compare;
+mod dent_cmd;
 mod frames_cmd;
 #[cfg(feature = "gpu")]
 mod gpu_cmd;
@@ -118,6 +119,37 @@ enum Command {
         /// The whole image (PNG).
         #[arg(short, long, value_name = "OUT.png")]
         output: PathBuf,
+        /// No summary.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// Convert a height (bump) map into a normal map as the dents thesis
+    /// does (G3D's Sobel converter, byte-compatible): an 8-bit grey PNG in,
+    /// an 8-bit RGBA PNG out (RGB the normal, +y towards the top row; A the
+    /// height).
+    Normalmap {
+        /// The height map (8-bit grey; 16-bit grey, or RGB whose red is the height, also read).
+        #[arg(value_name = "HEIGHT.png")]
+        input: PathBuf,
+        /// The normal map.
+        #[arg(short, long, value_name = "NORMAL.png")]
+        output: PathBuf,
+        /// Texels of a full-scale (0 to 255) height step: 8 in the thesis.
+        #[arg(long, default_value_t = 8.0)]
+        white_height: f32,
+        /// Borders: wrap around (the thesis's) or clamp to the edge.
+        #[arg(long, default_value = "repeat", value_name = "repeat|clamp")]
+        wrap: String,
+        /// Alpha holds the 3×3 mean height.
+        #[arg(long)]
+        low_pass: bool,
+        /// Alpha's height is multiplied by the normal's z.
+        #[arg(long)]
+        scale_height_by_nz: bool,
+        /// Convert only this rectangle (texels, X1 and Y1 excluded) into a
+        /// fragment of that size, its lookups over the whole map.
+        #[arg(long, value_name = "X0,Y0,X1,Y1")]
+        rect: Option<String>,
         /// No summary.
         #[arg(short, long)]
         quiet: bool,
@@ -440,6 +472,25 @@ fn main() -> ExitCode {
             }
         }
         Command::Merge { bands, output, quiet } => frames_cmd::cmd_merge(&bands, &output, quiet),
+        Command::Normalmap {
+            input,
+            output,
+            white_height,
+            wrap,
+            low_pass,
+            scale_height_by_nz,
+            rect,
+            quiet,
+        } => dent_cmd::cmd_normalmap(&dent_cmd::NormalmapArgs {
+            input: &input,
+            output: &output,
+            white_height,
+            wrap: &wrap,
+            low_pass,
+            scale_height_by_nz,
+            rect: rect.as_deref(),
+            quiet,
+        }),
         Command::Eval { input } => cmd_eval(&input),
         Command::Groebner {
             vars,

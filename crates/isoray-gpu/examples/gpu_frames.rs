@@ -2,8 +2,8 @@
 //! `bench/gpu/lavapipe.sh` and `bench/gpu/device.sh`.
 //!
 //! ```text
-//! frames SCENE [--size WxH] [--frames N] [--warmup K] [--cpu N] [--latency]
-//!        [--label TEXT] [--kernel compiled|interpreted] [--set KEY=VALUE]...
+//! gpu_frames SCENE [--size WxH] [--frames N] [--warmup K] [--cpu N] [--latency]
+//!        [--label TEXT] [--kernel compiled|interpreted] [--walk-meshes] [--set KEY=VALUE]...
 //! ```
 //!
 //! Prints one tab-separated line: label, size, the median GPU time of the
@@ -15,7 +15,9 @@
 //! next finished frame, pipeline build included. A scene with an
 //! `[animation]` is played: each frame moves it to the next frame's time
 //! (tracks, bones, MIDI mappings) before it is drawn, and the wall time
-//! includes that move and the upload of the new inputs.
+//! includes that move and the upload of the new inputs. `--walk-meshes`
+//! walks the meshes' trees for the primary rays instead of reading the
+//! raster prepass.
 
 use std::time::{Duration, Instant};
 
@@ -32,6 +34,7 @@ struct Args {
     latency: bool,
     label: String,
     kernel: Option<Kernel>,
+    walk_meshes: bool,
     sets: Vec<String>,
 }
 
@@ -46,6 +49,7 @@ fn parse() -> Result<Args, String> {
         latency: false,
         label: String::new(),
         kernel: None,
+        walk_meshes: false,
         sets: Vec::new(),
     };
     let num = |v: Option<String>, what: &str| -> Result<usize, String> {
@@ -72,13 +76,14 @@ fn parse() -> Result<Args, String> {
                 let name = it.next().unwrap_or_default();
                 a.kernel = Some(Kernel::from_name(&name).ok_or("--kernel is compiled or interpreted")?);
             }
+            "--walk-meshes" => a.walk_meshes = true,
             "--set" => a.sets.push(it.next().ok_or("--set needs KEY=VALUE")?),
             s if a.scene.is_empty() && !s.starts_with('-') => a.scene = s.to_string(),
             s => return Err(format!("unexpected argument `{s}`")),
         }
     }
     if a.scene.is_empty() {
-        return Err("usage: frames SCENE [--size WxH] [--frames N] [--warmup K] [--cpu N] [--latency] [--label TEXT] [--kernel compiled|interpreted] [--set KEY=VALUE]...".into());
+        return Err("usage: gpu_frames SCENE [--size WxH] [--frames N] [--warmup K] [--cpu N] [--latency] [--label TEXT] [--kernel compiled|interpreted] [--walk-meshes] [--set KEY=VALUE]...".into());
     }
     Ok(a)
 }
@@ -111,6 +116,7 @@ fn run() -> Result<(), String> {
     let opts = GpuRenderOptions {
         timing: true,
         kernel: a.kernel,
+        no_mesh_raster: a.walk_meshes,
         ..Default::default()
     };
     let frame = |gpu: &mut GpuRenderer, scene: &Scene| gpu.render(scene, &opts).map_err(|e| e.to_string());
