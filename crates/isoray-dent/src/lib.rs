@@ -12,6 +12,12 @@
 //! - [`normalmap`]: the thesis's (G3D's) Sobel normal map of a height map,
 //!   byte for byte, recomputed on a changed rectangle grown by one texel
 //!   so that a partial update equals a full recompute;
+//! - [`uv`]: how a body's surface lays out on its map (planar and
+//!   spherical mappings, one-to-one where they say), and the tangent frame;
+//! - [`field`]: bodies as signed distances, and the marches the imprints use;
+//! - [`imprint`]: where an impactor presses a body, the dent in its map:
+//!   isoray's texel method along the true normal, and the thesis's
+//!   orthographic depth passes for comparison;
 //! - [`bump`]: Blinn's perturbed normal, the thesis's derivation of bump
 //!   mapping.
 //!
@@ -28,9 +34,13 @@
 #![warn(missing_docs)]
 
 pub mod bump;
+pub mod field;
 pub mod heightmap;
+pub mod imprint;
 pub mod impulse;
 pub mod normalmap;
+pub mod uv;
+mod vec;
 
 pub use heightmap::{HeightMap, Rect};
 pub use normalmap::{NormalMap, NormalMapOptions, Wrap};
