@@ -11,16 +11,18 @@ pub trait Field {
     /// The signed distance at `p`.
     fn distance(&self, p: V3) -> f64;
 
-    /// The unit outward normal at `p` (central differences of step `h`).
+    /// The unit outward normal at `p`: the tetrahedral difference of step
+    /// `h` (four evaluations: Σ kᵢ·d(p + h·kᵢ) over the corners kᵢ of a
+    /// tetrahedron).
     fn normal(&self, p: V3, h: f64) -> V3 {
-        let g = |i: usize| {
-            let mut a = p;
-            let mut b = p;
-            a[i] += h;
-            b[i] -= h;
-            self.distance(a) - self.distance(b)
-        };
-        normalize([g(0), g(1), g(2)])
+        let mut g = [0.0; 3];
+        for k in [[1.0, -1.0, -1.0], [-1.0, -1.0, 1.0], [-1.0, 1.0, -1.0], [1.0, 1.0, 1.0]] {
+            let d = self.distance([p[0] + h * k[0], p[1] + h * k[1], p[2] + h * k[2]]);
+            for i in 0..3 {
+                g[i] += k[i] * d;
+            }
+        }
+        normalize(g)
     }
 }
 

@@ -85,6 +85,9 @@ pub struct HeightMap {
     texels: Vec<f32>,
     dirty: Option<Rect>,
     saturated: u64,
+    /// The lowest and highest values of the map.
+    lo: f32,
+    hi: f32,
 }
 
 /// The value of an untouched texel.
@@ -100,19 +103,26 @@ impl HeightMap {
             texels: vec![NEUTRAL; width as usize * height as usize],
             dirty: None,
             saturated: 0,
+            lo: NEUTRAL,
+            hi: NEUTRAL,
         }
     }
 
     /// A map of the given texels (row-major, each clamped to [0, 1]).
     pub fn from_texels(width: u32, height: u32, range: f64, texels: Vec<f32>) -> HeightMap {
         assert_eq!(texels.len(), width as usize * height as usize, "texel count");
+        let texels: Vec<f32> = texels.into_iter().map(|h| h.clamp(0.0, 1.0)).collect();
+        let lo = texels.iter().copied().fold(NEUTRAL, f32::min);
+        let hi = texels.iter().copied().fold(NEUTRAL, f32::max);
         HeightMap {
             width,
             height,
             range,
-            texels: texels.into_iter().map(|h| h.clamp(0.0, 1.0)).collect(),
+            texels,
             dirty: None,
             saturated: 0,
+            lo,
+            hi,
         }
     }
 
@@ -158,12 +168,19 @@ impl HeightMap {
         let h = h.clamp(0.0, 1.0) as f32;
         if h < self.texels[i] {
             self.texels[i] = h;
+            self.lo = self.lo.min(h);
             let r = Rect::texel(x, y);
             self.dirty = Some(self.dirty.map_or(r, |d| d.union(r)));
             true
         } else {
             false
         }
+    }
+
+    /// The largest |displacement| of any texel, scene units: no surface
+    /// point of the map is farther than this from the undented surface.
+    pub fn deepest(&self) -> f64 {
+        (NEUTRAL - self.lo).max(self.hi - NEUTRAL) as f64 * self.range
     }
 
     /// The rectangle changed since the last call, and forgets it.

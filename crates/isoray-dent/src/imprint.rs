@@ -114,7 +114,7 @@ pub fn texels_near(mapping: &UvMapping, w: u32, h: u32, reach: Sphere) -> Vec<Re
     }
 }
 
-/// The side of the blocks of texels the texel imprint skips at once.
+/// The side of the smallest blocks of texels the texel imprint skips at once.
 const BLOCK: u32 = 8;
 
 /// The picture's width and height (scene units) of a planar mapping.
@@ -173,18 +173,30 @@ pub fn imprint_texel(
     let mut out = Imprint::default();
     let step = normal_step(map, mapping);
     for rect in texels_near(mapping, map.width(), map.height(), reach) {
-        for by in (rect.y0..rect.y1).step_by(BLOCK as usize) {
-            for bx in (rect.x0..rect.x1).step_by(BLOCK as usize) {
-                let block = Rect::new(bx, by, (bx + BLOCK).min(rect.x1), (by + BLOCK).min(rect.y1));
-                if !block_may_be_reached(map, mapping, a, b, block, m) {
-                    out.examined += block.area();
-                    continue;
-                }
-                for y in block.y0..block.y1 {
-                    for x in block.x0..block.x1 {
-                        out.examined += 1;
-                        imprint_one(map, mapping, a, b, (x, y), step, reach, m, &mut out);
-                    }
+        // A quadtree over the candidates: blocks B cannot reach are
+        // skipped whole, the rest split down to BLOCK × BLOCK texels.
+        let mut stack = vec![rect];
+        while let Some(block) = stack.pop() {
+            if block.is_empty() {
+                continue;
+            }
+            if !block_may_be_reached(map, mapping, a, b, block, m) {
+                out.examined += block.area();
+                continue;
+            }
+            let (w, h) = (block.x1 - block.x0, block.y1 - block.y0);
+            if w > BLOCK || h > BLOCK {
+                let (mx, my) = (block.x0 + w.div_ceil(2), block.y0 + h.div_ceil(2));
+                stack.push(Rect::new(block.x0, block.y0, mx, my));
+                stack.push(Rect::new(mx, block.y0, block.x1, my));
+                stack.push(Rect::new(block.x0, my, mx, block.y1));
+                stack.push(Rect::new(mx, my, block.x1, block.y1));
+                continue;
+            }
+            for y in block.y0..block.y1 {
+                for x in block.x0..block.x1 {
+                    out.examined += 1;
+                    imprint_one(map, mapping, a, b, (x, y), step, reach, m, &mut out);
                 }
             }
         }
@@ -222,13 +234,9 @@ fn block_may_be_reached(
     }
     // The corners' distances, plus the corner texels' own reach (half a
     // texel each way, as far as a corner is from its neighbour).
-    radius *= 1.0 + 2.0 / BLOCK as f64;
-    let mut deepest: f64 = 0.0;
-    for y in block.y0..block.y1 {
-        for x in block.x0..block.x1 {
-            deepest = deepest.max(map.displacement(x, y).abs());
-        }
-    }
+    let side = (block.x1 - block.x0).min(block.y1 - block.y0).max(1);
+    radius *= 1.0 + 2.0 / side as f64;
+    let deepest = map.deepest();
     b.distance(centre) < radius + deepest + m.epsilon
 }
 

@@ -18,6 +18,7 @@
 //! - [`imprint`]: where an impactor presses a body, the dent in its map:
 //!   isoray's texel method along the true normal, and the thesis's
 //!   orthographic depth passes for comparison;
+//! - [`maps`]: a dentable object's maps together, kept consistent;
 //! - [`bump`]: Blinn's perturbed normal, the thesis's derivation of bump
 //!   mapping.
 //!
@@ -38,9 +39,11 @@ pub mod field;
 pub mod heightmap;
 pub mod imprint;
 pub mod impulse;
+pub mod maps;
 pub mod normalmap;
 pub mod uv;
 mod vec;
 
 pub use heightmap::{HeightMap, Rect};
+pub use maps::DentMaps;
 pub use normalmap::{NormalMap, NormalMapOptions, Wrap};

@@ -28,6 +28,9 @@ pub enum Wrap {
     Repeat,
     /// Lookups clamp to the edge.
     Clamp,
+    /// Columns wrap around, rows clamp (a spherical map: longitude wraps,
+    /// the poles do not).
+    Columns,
 }
 
 /// How heights become normals (the defaults are the thesis's).
@@ -137,22 +140,24 @@ impl NormalMap {
 
     /// Recomputes every normal that a change of the heights inside
     /// `changed` can alter: the rectangle grown by one texel, wrapped
-    /// around the borders with [`Wrap::Repeat`], clipped with
-    /// [`Wrap::Clamp`]. Returns the texels recomputed.
+    /// around the borders that wrap, clipped at those that clamp. Returns
+    /// the texels recomputed.
     pub fn update(&mut self, heights: &[f32], opts: &NormalMapOptions, changed: Rect) -> u64 {
         if changed.is_empty() {
             return 0;
         }
-        let span = |a: u32, b: u32, n: u32| -> Vec<u32> {
+        let span = |a: u32, b: u32, n: u32, wraps: bool| -> Vec<u32> {
             let (lo, hi) = (a as i64 - 1, b as i64 + 1);
-            match opts.wrap {
-                _ if hi - lo >= n as i64 => (0..n).collect(),
-                Wrap::Repeat => (lo..hi).map(|i| i.rem_euclid(n as i64) as u32).collect(),
-                Wrap::Clamp => (lo.max(0)..hi.min(n as i64)).map(|i| i as u32).collect(),
+            if hi - lo >= n as i64 {
+                (0..n).collect()
+            } else if wraps {
+                (lo..hi).map(|i| i.rem_euclid(n as i64) as u32).collect()
+            } else {
+                (lo.max(0)..hi.min(n as i64)).map(|i| i as u32).collect()
             }
         };
-        let xs = span(changed.x0, changed.x1, self.width);
-        let ys = span(changed.y0, changed.y1, self.height);
+        let xs = span(changed.x0, changed.x1, self.width, opts.wrap != Wrap::Clamp);
+        let ys = span(changed.y0, changed.y1, self.height, opts.wrap == Wrap::Repeat);
         for &y in &ys {
             for &x in &xs {
                 self.texels[(y * self.width + x) as usize] = texel(heights, self.width, self.height, x, y, opts);
@@ -169,18 +174,33 @@ impl NormalMap {
     }
 }
 
-/// One texel of the normal map: G3D's Sobel kernels, with each kernel's
-/// opposite taps paired (so a flat neighbourhood gives exactly 0 and the
-/// flat normal (128, 128, 255), as G3D's bytes have it), in f64.
-fn texel(heights: &[f32], w: u32, h: u32, x: u32, y: u32, opts: &NormalMapOptions) -> [u8; 4] {
-    let at = |dx: i64, dy: i64| -> f64 {
-        let (xi, yi) = (x as i64 + dx, y as i64 + dy);
-        let (xi, yi) = match opts.wrap {
-            Wrap::Repeat => (xi.rem_euclid(w as i64), yi.rem_euclid(h as i64)),
-            Wrap::Clamp => (xi.clamp(0, w as i64 - 1), yi.clamp(0, h as i64 - 1)),
+/// The unit normal at texel (x, y) of a height map (tangent space: x
+/// along the columns, y towards row 0), and the texel's alpha height: G3D's
+/// Sobel kernels, with each kernel's opposite taps paired (so a flat
+/// neighbourhood gives exactly 0 and the flat normal), in f64.
+pub fn sobel_normal(heights: &[f32], w: u32, h: u32, x: u32, y: u32, opts: &NormalMapOptions) -> ([f64; 3], f64) {
+    // The neighbours' columns and rows, wrapped or clamped once.
+    let near = |i: u32, n: u32, wraps: bool| -> [usize; 3] {
+        let prev = if i > 0 {
+            i - 1
+        } else if wraps {
+            n - 1
+        } else {
+            0
         };
-        heights[(yi * w as i64 + xi) as usize] as f64
+        let next = if i + 1 < n {
+            i + 1
+        } else if wraps {
+            0
+        } else {
+            n - 1
+        };
+        [prev as usize, i as usize, next as usize]
     };
+    let cols = near(x, w, opts.wrap != Wrap::Clamp);
+    let rows = near(y, h, opts.wrap == Wrap::Repeat);
+    let at =
+        |dx: i64, dy: i64| -> f64 { heights[rows[(dy + 1) as usize] * w as usize + cols[(dx + 1) as usize]] as f64 };
     // −(Sobel Y): the row below minus the row above (+y towards row 0 for a
     // height rising downwards); −(Sobel X): the left column minus the right.
     let dy = (at(-1, 1) - at(-1, -1)) + 2.0 * (at(0, 1) - at(0, -1)) + (at(1, 1) - at(1, -1));
@@ -201,6 +221,12 @@ fn texel(heights: &[f32], w: u32, h: u32, x: u32, y: u32, opts: &NormalMapOption
     if opts.scale_height_by_nz {
         hh *= n[2];
     }
+    (n, hh)
+}
+
+/// One texel of the normal map, as G3D packs it.
+fn texel(heights: &[f32], w: u32, h: u32, x: u32, y: u32, opts: &NormalMapOptions) -> [u8; 4] {
+    let (n, hh) = sobel_normal(heights, w, h, x, y, opts);
     let byte = |v: f64| iround(v * 127.5 + 127.5).clamp(0, 255) as u8;
     [
         byte(n[0]),
@@ -361,13 +387,14 @@ mod tests {
 
     proptest::proptest! {
         /// A recompute of the changed rectangle grown by one equals the full
-        /// recompute, on every map and rectangle, both border modes.
+        /// recompute, on every map and rectangle, every border mode.
         #[test]
         fn a_partial_update_equals_a_full_recompute(
             seed in 0u64..1000, w in 3u32..20, h in 3u32..20,
-            x0 in 0u32..20, y0 in 0u32..20, cw in 1u32..8, ch in 1u32..8, clamp in proptest::bool::ANY,
+            x0 in 0u32..20, y0 in 0u32..20, cw in 1u32..8, ch in 1u32..8, mode in 0usize..3,
         ) {
-            let o = NormalMapOptions { wrap: if clamp { Wrap::Clamp } else { Wrap::Repeat }, ..Default::default() };
+            let wrap = [Wrap::Repeat, Wrap::Clamp, Wrap::Columns][mode];
+            let o = NormalMapOptions { wrap, ..Default::default() };
             let mut hs = random_map(w, h, seed);
             let mut part = NormalMap::of(&hs, w, h, &o);
             let r = Rect { x0: x0 % w, y0: y0 % h, x1: (x0 % w + cw).min(w), y1: (y0 % h + ch).min(h) };

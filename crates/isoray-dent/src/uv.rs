@@ -105,6 +105,17 @@ impl UvMapping {
         }
     }
 
+    /// Whether the surface point q of normal n is on the mapped side: a
+    /// planar map's points face its + side, a spherical map's face away
+    /// from the origin. (A planar map's far side would otherwise show the
+    /// near side's dents.)
+    pub fn faces(&self, q: V3, n: V3) -> bool {
+        match *self {
+            UvMapping::Planar { axis, .. } => n[axis] > 0.0,
+            UvMapping::Spherical { .. } => dot(n, q) > 0.0,
+        }
+    }
+
     /// Whether columns wrap around (the spherical longitude).
     pub fn wraps_columns(&self) -> bool {
         matches!(self, UvMapping::Spherical { .. })

@@ -29,6 +29,7 @@
 
 pub mod bounds;
 pub mod camera;
+mod dents;
 pub mod meshes;
 pub mod output;
 pub mod sequence;

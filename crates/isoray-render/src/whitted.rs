@@ -115,7 +115,7 @@ impl Worker<'_> {
                 }
                 let inside = packet.media[0].is_inside();
                 self.rays = std::mem::take(&mut packet.rays);
-                let hs = match traced {
+                let mut hs = match traced {
                     Some(hs) => hs,
                     None => {
                         let (hs, e) = self.trace_and_normals(ctx, inside);
@@ -126,6 +126,8 @@ impl Worker<'_> {
                 // Beer–Lambert over the segment just travelled inside an object,
                 // from the surface point the ray left to the one it reached.
                 let (surfaces, objects) = self.materials(ctx, &hs, &mut evals, inside);
+                // Dented objects' normals tilted by their normal maps.
+                crate::dents::perturb(ctx.scene, &mut hs, &objects);
                 if inside {
                     for (k, &i) in hs.idx.iter().enumerate() {
                         if let Some(o) = packet.media[i].top() {

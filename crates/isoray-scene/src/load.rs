@@ -100,6 +100,7 @@ pub fn load_str_with(text: &str, name: &str, overrides: &[String], options: &Loa
 
 const TOP_KEYS: &[&str] = &[
     "animation",
+    "physics",
     "track",
     "midi",
     "bone",
@@ -289,6 +290,10 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
         Some(v) => Some(crate::animation::read_animation(src, v)?),
         None => None,
     };
+    let physics = match top.get("physics") {
+        Some(v) => Some(crate::physics::read_physics(src, v)?),
+        None => None,
+    };
     let mut tracks = match top.get("track") {
         Some(v) => crate::animation::read_tracks(src, v)?,
         None => Vec::new(),
@@ -383,6 +388,7 @@ fn build(src: &Sources, root: &[Entry], options: &LoadOptions) -> Result<Scene> 
     let (shape, derived) = crate::derive::assemble(&mut objects, &materials, &render, &inputs);
     let mut scene = Scene {
         animation,
+        physics,
         tracks,
         bones,
         midi,

@@ -559,6 +559,14 @@ settings! {
         absorption: Vec3 = [0.0; 3], colour(), "Beer–Lambert absorption per unit distance travelled inside";
         /// Weight the highlight by Fresnel–Schlick, 0.04 + 0.96·(1 − h·l)⁵.
         specular_fresnel: bool = false, boolean(), "weight the specular term by Fresnel–Schlick, F = 0.04 + 0.96·(1 − h·l)⁵ with h the half vector (the Granada thesis's Listing 3.3): highlights faint face-on, strong at grazing angles";
+        /// kg/m³: a body's mass is its density times its volume.
+        density: f64 = 1000.0, num(Range::POSITIVE), "kg/m³: a rigid body's mass is its density times its volume";
+        /// ε: the bounce of an impact, and the yield impulse ε/(1 − ε).
+        restitution: f64 = 0.5, num(UNIT), "ε: the share of the closing speed an impact gives back (the smaller of the pair's); a dent needs an impulse above ε/(1 − ε)";
+        /// κ: the dent per unit of impulse beyond the yield, per N·s.
+        dent_compliance: f64 = 0.0, num(Range::NON_NEGATIVE), "κ, per N·s: a dent is t·κ·max(0, ‖j‖ − ε/(1 − ε)) deep; 0 never dents";
+        /// t: the body's thickness (of its walls, when hollow).
+        thickness: f64 = 1.0, num(Range::POSITIVE), "t, scene units: the body's thickness (of its walls when hollow), scaling its dents";
     }
     extra {
         /// Its name.
@@ -683,6 +691,9 @@ pub fn object_keys() -> &'static [KeySpec] {
                 "the `[[bone]]` that carries the object: `position` and `rotation` are then in the bone's frame",
             ),
         ]
+        .into_iter()
+        .chain(crate::physics::object_physics_keys())
+        .collect()
     });
     &KEYS
 }
@@ -795,6 +806,7 @@ pub fn key_tables() -> Vec<(&'static str, &'static [KeySpec])> {
         ("### `[[midi]]`", crate::midi::midi_keys()),
         ("### `[[bone]]`", crate::skeleton::bone_keys()),
         ("### `[skeleton]`", crate::skeleton::skeleton_keys()),
+        ("### `[physics]`", crate::physics::physics_keys()),
     ]
 }
 
@@ -819,6 +831,8 @@ pub struct Object {
     /// algebra (implicit and parametric surfaces): changing one recompiles
     /// the object. Every other input the shape reads stays live.
     pub bound_inputs: Vec<u32>,
+    /// Its rigid body and dent keys, and its current dent maps.
+    pub physics: crate::physics::ObjectPhysics,
     /// The compiled shape apart from the scene (shared with the object cache).
     pub(crate) fragment: std::sync::Arc<crate::compile::Fragment>,
 }
@@ -900,6 +914,8 @@ impl Transform {
 pub struct Scene {
     /// The clock (`[animation]`): frame rate and duration, when given.
     pub animation: Option<crate::animation::Animation>,
+    /// The rigid-body simulation's settings (`[physics]`), when given.
+    pub physics: Option<crate::physics::Physics>,
     /// Keyframe tracks (`[[track]]`), applied whenever the time changes.
     pub tracks: Vec<crate::animation::Track>,
     /// The skeleton (`[[bone]]`), parents before children, at rest.

@@ -509,6 +509,7 @@ impl<'a> Build<'a> {
                             }
                         },
                     };
+                    let physics = crate::physics::read_object_physics(src, &mut r, &format!("object.{i}"))?;
                     r.finish_keys(object_keys())?;
                     // Placed in the file, or by a track (which needs the inputs).
                     let transform =
@@ -602,6 +603,7 @@ impl<'a> Build<'a> {
                         bound_inputs: fragment.bound.clone(),
                         transform,
                         fragment,
+                        physics,
                     });
                     if let Some(p) = lib.progress() {
                         p.update(i as u64 + 1, count);

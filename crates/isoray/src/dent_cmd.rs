@@ -121,3 +121,221 @@ pub(crate) fn cmd_normalmap(a: &NormalmapArgs) -> Result<(), Failure> {
     }
     Ok(())
 }
+
+/// The options of `isoray dent`, as parsed.
+pub(crate) struct DentArgs<'a> {
+    pub scene: &'a crate::SceneArgs,
+    pub object: &'a str,
+    pub at: &'a [f64],
+    pub normal: &'a [f64],
+    pub depth: Option<f64>,
+    pub impulse: Option<f64>,
+    pub impactor: Option<&'a str>,
+    pub radius: f64,
+    pub imprint: &'a str,
+    pub quiet: bool,
+}
+
+fn vec3_arg(v: &[f64], flag: &str) -> Result<[f64; 3], Failure> {
+    match v {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([*x, *y, *z]),
+        _ => Err(usage(format!("{flag}: expected three numbers X,Y,Z"))),
+    }
+}
+
+/// Runs `isoray dent`: one impact on a dentable object, its maps read from
+/// and written back to the `--maps` folder.
+pub(crate) fn cmd_dent(a: &DentArgs) -> Result<(), Failure> {
+    use isoray_dent::field::March;
+    use isoray_dent::imprint::{imprint_ortho, imprint_texel, OrthoOptions, Sphere};
+    let Some(dir) = a.scene.maps() else {
+        return Err(usage(
+            "isoray dent needs --maps DIR: the folder its maps are read from and written to".into(),
+        ));
+    };
+    std::fs::create_dir_all(dir).map_err(|e| io_failure(format!("{}: {e}", dir.display())))?;
+    let scene = a.scene.load(&[])?;
+    let names = || {
+        scene
+            .objects
+            .iter()
+            .filter_map(|o| o.name.clone())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let find = |name: &str| {
+        scene.object_named(name).ok_or_else(|| {
+            usage(format!(
+                "`{}` has no object named `{name}` (named objects: {})",
+                a.scene.path().display(),
+                names()
+            ))
+        })
+    };
+    let i = find(a.object)?;
+    let obj = &scene.objects[i];
+    if obj.physics.dents == isoray_scene::DentMode::None {
+        return Err(usage(format!(
+            "object `{}` is not dentable: give it dents = \"bump\" and a dent_map = {{ size, range, uv, extent }}",
+            a.object
+        )));
+    }
+    let at = vec3_arg(a.at, "--at")?;
+    let n = vec3_arg(a.normal, "--normal")?;
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if len == 0.0 {
+        return Err(usage(
+            "--normal: expected a nonzero direction (from the object towards the impactor)".into(),
+        ));
+    }
+    let n = n.map(|c| c / len);
+    let material = &scene.materials[obj.material];
+    let depth = match (a.depth, a.impulse) {
+        (Some(d), None) if d >= 0.0 && d.is_finite() => d,
+        (None, Some(j)) if j >= 0.0 && j.is_finite() => {
+            isoray_dent::impulse::dent_depth(material.thickness, material.dent_compliance, j, material.restitution)
+        }
+        (Some(_), Some(_)) => return Err(usage("give --depth or --impulse, not both".into())),
+        (None, None) => {
+            return Err(usage(
+                "give the dent's --depth D (scene units) or the impact's --impulse J (N·s)".into(),
+            ))
+        }
+        _ => return Err(usage("--depth and --impulse take a number ≥ 0".into())),
+    };
+    let mut maps = obj
+        .physics
+        .maps
+        .as_deref()
+        .cloned()
+        .map_or_else(|| obj.physics.dent_map.blank(), Ok)
+        .map_err(|e| usage(format!("`object.{i}.dent_map`: {e}")))?;
+    let place = scene.placement(i);
+    let s = place.scale;
+    let inputs = &scene.inputs;
+    let a_world = |p: [f64; 3]| obj.shape.eval_with(inputs, p);
+    let a_local = |q: [f64; 3]| a_world(place.to_world(q)) / s;
+    // The impactor in the world, pushed `depth` along −n from its contact pose.
+    let push = |p: [f64; 3]| [p[0] + n[0] * depth, p[1] + n[1] * depth, p[2] + n[2] * depth];
+    let ball_centre = std::array::from_fn(|k| at[k] + n[k] * (a.radius - depth));
+    let b_world: Box<dyn Fn([f64; 3]) -> f64> = match a.impactor {
+        None => {
+            if !(a.radius > 0.0 && a.radius.is_finite()) {
+                return Err(usage("--radius: expected a positive number of scene units".into()));
+            }
+            let r = a.radius;
+            Box::new(move |p: [f64; 3]| {
+                let d: [f64; 3] = std::array::from_fn(|k| p[k] - ball_centre[k]);
+                (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() - r
+            })
+        }
+        Some(name) => {
+            let j = find(name)?;
+            if j == i {
+                return Err(usage(format!(
+                    "`{name}` cannot strike itself: name another object as --impactor"
+                )));
+            }
+            let shape = scene.objects[j].shape.clone();
+            let inputs = inputs.clone();
+            Box::new(move |p: [f64; 3]| shape.eval_with(&inputs, push(p)))
+        }
+    };
+    let b_local = |q: [f64; 3]| b_world(place.to_world(q)) / s;
+    // The impactor's reach around the contact: a ball, or the object's
+    // extent from the pushed contact point along 26 directions.
+    let reach_world = match a.impactor {
+        None => Sphere {
+            centre: ball_centre,
+            radius: a.radius,
+        },
+        Some(_) => {
+            let start = [
+                at[0] - n[0] * depth * 0.5,
+                at[1] - n[1] * depth * 0.5,
+                at[2] - n[2] * depth * 0.5,
+            ];
+            let cap = 4.0 * obj.physics.dent_map.extent * s;
+            let mut r: f64 = depth;
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        if (dx, dy, dz) == (0, 0, 0) {
+                            continue;
+                        }
+                        let d = [dx as f64, dy as f64, dz as f64];
+                        let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                        let d = d.map(|c| c / l);
+                        r = r.max(isoray_dent::field::exit(
+                            &|p: [f64; 3]| b_world(p),
+                            start,
+                            d,
+                            cap,
+                            March::default(),
+                        ));
+                    }
+                }
+            }
+            Sphere {
+                centre: start,
+                radius: r + depth,
+            }
+        }
+    };
+    let reach = Sphere {
+        centre: place.to_local(reach_world.centre),
+        radius: reach_world.radius / s,
+    };
+    let started = std::time::Instant::now();
+    let out = match a.imprint {
+        "texel" => imprint_texel(&mut maps.height, &maps.mapping.clone(), &a_local, &b_local, reach, March::default()),
+        "ortho" | "ortho-projected" => {
+            let e = obj.physics.dent_map.extent;
+            let pixel = 2.0 * e / maps.height.width() as f64 / 2.0;
+            imprint_ortho(
+                &mut maps.height,
+                &maps.mapping.clone(),
+                &a_local,
+                &b_local,
+                place.to_local(at),
+                place.dir_to_local(n),
+                reach,
+                pixel,
+                OrthoOptions {
+                    project_on_normal: a.imprint == "ortho-projected",
+                },
+                March::default(),
+            )
+        }
+        other => {
+            return Err(usage(format!(
+                "--imprint {other}: expected texel (along the surface normal), ortho (the thesis's) or ortho-projected (the thesis's with its N·N_C fix)"
+            )))
+        }
+    };
+    let imprint_ms = started.elapsed().as_secs_f64() * 1e3;
+    let started = std::time::Instant::now();
+    let normals = maps.update_normals();
+    let normal_ms = started.elapsed().as_secs_f64() * 1e3;
+    maps.write(dir, a.object).map_err(|e| io_failure(e.to_string()))?;
+    if !a.quiet {
+        let (h, nm) = isoray_dent::DentMaps::paths(dir, a.object);
+        eprintln!(
+            "dent of {depth:.6} on `{}` ({} imprint): {} texels lowered, deepest {:.6}, {} normals recomputed; {imprint_ms:.2} ms imprint, {normal_ms:.2} ms normals",
+            a.object,
+            a.imprint,
+            out.lowered,
+            out.deepest * s,
+            normals
+        );
+        if maps.height.saturated() > 0 {
+            eprintln!(
+                "warning: {} texels reached the bottom of the map's range ({} scene units): raise dent_map.range",
+                maps.height.saturated(),
+                maps.height.range * 0.5 * s
+            );
+        }
+        eprintln!("wrote {} and {}", h.display(), nm.display());
+    }
+    Ok(())
+}

@@ -154,6 +154,58 @@ enum Command {
         #[arg(short, long)]
         quiet: bool,
     },
+    /// Strike a dentable object once and write its dent maps: the impactor
+    /// (a ball of --radius touching at --at, or --impactor OBJECT as placed
+    /// in the scene) pushed --depth along −--normal, or as deep as an
+    /// --impulse makes it with the object's material (docs/DENTS.md). The
+    /// maps are read from and written back to --maps DIR as
+    /// NAME-height.png (16-bit) and NAME-normal.png (RGBA).
+    Dent {
+        #[command(flatten)]
+        input: SceneArgs,
+        /// The struck object's name.
+        object: String,
+        /// The contact point, world coordinates.
+        #[arg(
+            long,
+            value_delimiter = ',',
+            allow_hyphen_values = true,
+            value_name = "X,Y,Z",
+            required = true
+        )]
+        at: Vec<f64>,
+        /// The contact normal, from the object towards the impactor.
+        #[arg(
+            long,
+            value_delimiter = ',',
+            allow_hyphen_values = true,
+            value_name = "X,Y,Z",
+            required = true
+        )]
+        normal: Vec<f64>,
+        /// The dent's depth, scene units.
+        #[arg(long)]
+        depth: Option<f64>,
+        /// The impact's elastic impulse, N·s: the depth is then
+        /// thickness · dent_compliance · max(0, J − ε/(1 − ε)).
+        #[arg(long)]
+        impulse: Option<f64>,
+        /// The object that strikes, as placed in the scene (touching the
+        /// struck object at --at); default a ball of --radius.
+        #[arg(long, value_name = "OBJECT")]
+        impactor: Option<String>,
+        /// The default impactor ball's radius, scene units.
+        #[arg(long, default_value_t = 0.25)]
+        radius: f64,
+        /// How the dent is measured: texel (along the surface normal), ortho
+        /// (the thesis's depth passes along the impact) or ortho-projected
+        /// (those scaled by N·N_C).
+        #[arg(long, default_value = "texel", value_name = "texel|ortho|ortho-projected")]
+        imprint: String,
+        /// No summary.
+        #[arg(short, long)]
+        quiet: bool,
+    },
     /// Read points `x y z` from stdin and print the scene's signed distance at each.
     Eval {
         #[command(flatten)]
@@ -360,6 +412,10 @@ pub(crate) struct SceneArgs {
     /// at or before it (the scene's own value before the first).
     #[arg(long, value_name = "TAKE.mid")]
     midi: Option<PathBuf>,
+    /// A folder of dent maps (`isoray dent`, `isoray simulate`): each named
+    /// dentable object whose NAME-height.png is there is drawn with its dents.
+    #[arg(long, value_name = "DIR")]
+    maps: Option<PathBuf>,
 }
 
 impl SceneArgs {
@@ -397,12 +453,24 @@ impl SceneArgs {
             })?;
             scene.play_midi(&events)?;
         }
+        if let Some(dir) = &self.maps {
+            let io = !dir.is_dir();
+            scene.attach_dent_maps(dir).map_err(|message| Failure {
+                code: if io { 1 } else { 2 },
+                message,
+            })?;
+        }
         Ok(scene)
     }
 
     /// The scene file.
     pub(crate) fn path(&self) -> &Path {
         &self.scene
+    }
+
+    /// The folder of dent maps (`--maps`).
+    pub(crate) fn maps(&self) -> Option<&Path> {
+        self.maps.as_deref()
     }
 }
 
@@ -489,6 +557,29 @@ fn main() -> ExitCode {
             low_pass,
             scale_height_by_nz,
             rect: rect.as_deref(),
+            quiet,
+        }),
+        Command::Dent {
+            input,
+            object,
+            at,
+            normal,
+            depth,
+            impulse,
+            impactor,
+            radius,
+            imprint,
+            quiet,
+        } => dent_cmd::cmd_dent(&dent_cmd::DentArgs {
+            scene: &input,
+            object: &object,
+            at: &at,
+            normal: &normal,
+            depth,
+            impulse,
+            impactor: impactor.as_deref(),
+            radius,
+            imprint: &imprint,
             quiet,
         }),
         Command::Eval { input } => cmd_eval(&input),

@@ -1,0 +1,448 @@
+//! Rigid bodies and dents in a scene: the `[physics]` table, and the keys
+//! of an `[[object]]` that make it a body (`body`, `collider`, `velocity`,
+//! `angular_velocity`) or a dentable surface (`dents`, `dent_map`).
+//! Materials carry the impact model's constants (`density`,
+//! `restitution`, `dent_compliance`, `thickness`); see `docs/DENTS.md`.
+//!
+//! Also an object's current placement as numbers ([`Placement`]): where
+//! physics, dents and normal mapping take points between the world and the
+//! object's own coordinates.
+
+use std::sync::Arc;
+
+use crate::error::{SceneError, Sources};
+use crate::reader::Reader;
+use crate::schema::{key, num, KeySpec, Kind, Range};
+
+type Result<T> = std::result::Result<T, SceneError>;
+use crate::doc::Located;
+
+/// `[physics]`: the rigid-body simulation's settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Physics {
+    /// Gravity, m/s².
+    pub gravity: [f64; 3],
+    /// The fixed step, seconds.
+    pub timestep: f64,
+    /// Seconds simulated by `isoray simulate`.
+    pub duration: f64,
+}
+
+impl Default for Physics {
+    fn default() -> Self {
+        Physics {
+            gravity: [0.0, -9.81, 0.0],
+            timestep: 1.0 / 60.0,
+            duration: 2.0,
+        }
+    }
+}
+
+/// The keys of `[physics]`.
+pub fn physics_keys() -> &'static [KeySpec] {
+    static KEYS: std::sync::LazyLock<Vec<KeySpec>> = std::sync::LazyLock::new(|| {
+        vec![
+            key("gravity", Kind::Vector, "[0.0, -9.81, 0.0]", "gravity, m/s²"),
+            key(
+                "timestep",
+                num(Range::POSITIVE),
+                "0.016666666666666666",
+                "the simulation's fixed step, seconds",
+            ),
+            key(
+                "duration",
+                num(Range::POSITIVE),
+                "2.0",
+                "seconds `isoray simulate` runs by default",
+            ),
+        ]
+    });
+    &KEYS
+}
+
+pub(crate) fn read_physics(src: &Sources, v: &Located) -> Result<Physics> {
+    let mut r = Reader::new(src, v, "physics")?;
+    let keys = physics_keys();
+    let d = Physics::default();
+    let p = Physics {
+        gravity: r.vec3("gravity", d.gravity)?,
+        timestep: r.num_key(crate::schema::spec(keys, "timestep"))?,
+        duration: r.num_key(crate::schema::spec(keys, "duration"))?,
+    };
+    r.finish_keys(keys)?;
+    Ok(p)
+}
+
+/// What the simulation does with an object.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BodyKind {
+    /// Not simulated (the default): it neither moves nor collides.
+    #[default]
+    None,
+    /// Collides, never moves.
+    Fixed,
+    /// Moves under gravity and contacts.
+    Dynamic,
+    /// Moves with its `velocity` and `angular_velocity`, pushes others.
+    Kinematic,
+}
+
+/// The shape the simulation gives a body.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Collider {
+    /// An exact ball or half-space for objects recognised as spheres and
+    /// planes, otherwise the mesh (its convex hull for dynamic bodies).
+    #[default]
+    Auto,
+    /// The convex hull of the object's mesh.
+    Hull,
+    /// The object's mesh itself (fixed and kinematic bodies).
+    Mesh,
+}
+
+/// How impacts change a dentable object.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DentMode {
+    /// Never dented (the default).
+    #[default]
+    None,
+    /// Dents in its height (bump) map, shaded by normal mapping.
+    Bump,
+    /// Dents as geometry (CSG edits of its shape).
+    Sdf,
+    /// The map while a dent is shallow, geometry when it is deep or the map saturates.
+    Auto,
+}
+
+/// An object's dent map settings (`dent_map = { size, range, uv, extent }`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DentMapSettings {
+    /// Texels per side.
+    pub size: u32,
+    /// Scene units of a full height unit (the thesis's k): dents down to range/2.
+    pub range: f64,
+    /// The uv mapping's name.
+    pub uv: String,
+    /// The mapped region: the object's own cube [−extent, extent]³.
+    pub extent: f64,
+}
+
+impl Default for DentMapSettings {
+    fn default() -> Self {
+        DentMapSettings {
+            size: 512,
+            range: 0.05,
+            uv: "planar-xz".into(),
+            extent: 1.0,
+        }
+    }
+}
+
+impl DentMapSettings {
+    /// The uv mapping these settings name.
+    pub fn mapping(&self) -> std::result::Result<isoray_dent::uv::UvMapping, String> {
+        let e = self.extent;
+        isoray_dent::uv::UvMapping::named(&self.uv, [-e; 3], [e; 3])
+    }
+
+    /// An untouched map (height and normals) of these settings.
+    pub fn blank(&self) -> std::result::Result<isoray_dent::DentMaps, String> {
+        let mapping = self.mapping()?;
+        // A texel's size in scene units: the planar picture's side, or a
+        // row of the spherical map (half a great circle) over the texels.
+        let across = if mapping.wraps_columns() {
+            std::f64::consts::PI * self.extent
+        } else {
+            2.0 * self.extent
+        };
+        Ok(isoray_dent::DentMaps::new(
+            mapping,
+            self.size,
+            self.range,
+            across / self.size as f64,
+        ))
+    }
+}
+
+/// An object's physics and dent keys.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ObjectPhysics {
+    /// `body`.
+    pub body: BodyKind,
+    /// `collider`.
+    pub collider: Collider,
+    /// `velocity`, m/s, at the start.
+    pub velocity: [f64; 3],
+    /// `angular_velocity`, rad/s about world x, y, z, at the start.
+    pub angular_velocity: [f64; 3],
+    /// `dents`.
+    pub dents: DentMode,
+    /// `dent_map`.
+    pub dent_map: DentMapSettings,
+    /// The object's current dent maps (None: untouched, or not dentable).
+    pub maps: Option<Arc<isoray_dent::DentMaps>>,
+}
+
+const BODIES: &[(&str, BodyKind)] = &[
+    ("none", BodyKind::None),
+    ("fixed", BodyKind::Fixed),
+    ("dynamic", BodyKind::Dynamic),
+    ("kinematic", BodyKind::Kinematic),
+];
+const COLLIDERS: &[(&str, Collider)] = &[
+    ("auto", Collider::Auto),
+    ("hull", Collider::Hull),
+    ("mesh", Collider::Mesh),
+];
+const DENTS: &[(&str, DentMode)] = &[
+    ("none", DentMode::None),
+    ("bump", DentMode::Bump),
+    ("sdf", DentMode::Sdf),
+    ("auto", DentMode::Auto),
+];
+const UVS: &[&str] = &["planar-xz", "planar-xy", "planar-yz", "spherical"];
+
+/// The object keys of this module, for `object_keys`.
+pub(crate) fn object_physics_keys() -> Vec<KeySpec> {
+    fn names<T>(o: &[(&'static str, T)]) -> Vec<&'static str> {
+        o.iter().map(|(n, _)| *n).collect()
+    }
+    vec![
+        key(
+            "body",
+            Kind::Choice(names(BODIES)),
+            "\"none\"",
+            "the rigid body it is in `isoray simulate`: `\"fixed\"` collides and never moves, `\"dynamic\"` falls and bounces, `\"kinematic\"` moves at its velocity and pushes others",
+        ),
+        key(
+            "collider",
+            Kind::Choice(names(COLLIDERS)),
+            "\"auto\"",
+            "its shape in the simulation: `\"auto\"` an exact ball or half-space for spheres and planes, else its mesh (the convex hull for dynamic bodies); `\"hull\"`; `\"mesh\"`",
+        ),
+        key("velocity", Kind::Vector, "[0.0, 0.0, 0.0]", "m/s at the start of the simulation"),
+        key(
+            "angular_velocity",
+            Kind::Vector,
+            "[0.0, 0.0, 0.0]",
+            "rad/s about world x, y and z at the start",
+        ),
+        key(
+            "dents",
+            Kind::Choice(names(DENTS)),
+            "\"none\"",
+            "what impacts do to it: `\"bump\"` dents in its height map, shaded by normal mapping; `\"sdf\"` dents as geometry; `\"auto\"` the map while shallow, geometry when deep",
+        ),
+        key(
+            "dent_map",
+            Kind::Text("inline table"),
+            "{ size = 512, range = 0.05, uv = \"planar-xz\", extent = 1.0 }",
+            "its height map: `size` texels a side, `range` scene units of a full height unit (dents down to range/2), `uv` the mapping (`planar-xz`, `planar-xy`, `planar-yz`: a height field seen from the + side of y, z, x; `spherical`: a body around its origin), `extent`: the mapped region is the object's own cube [−extent, extent]³",
+        ),
+    ]
+}
+
+/// Reads an object's physics and dent keys (`ctx`: `object.N`).
+pub(crate) fn read_object_physics(src: &Sources, r: &mut Reader, ctx: &str) -> Result<ObjectPhysics> {
+    let mut out = ObjectPhysics {
+        body: r.choice("body", BODIES, BodyKind::None)?,
+        collider: r.choice("collider", COLLIDERS, Collider::Auto)?,
+        velocity: r.vec3("velocity", [0.0; 3])?,
+        angular_velocity: r.vec3("angular_velocity", [0.0; 3])?,
+        dents: r.choice("dents", DENTS, DentMode::None)?,
+        ..Default::default()
+    };
+    if let Some(v) = r.get("dent_map") {
+        let ctx = format!("{ctx}.dent_map");
+        let mut m = Reader::new(src, v, &ctx)?;
+        let d = DentMapSettings::default();
+        let size = m.int("size", d.size, 8, 16384)?;
+        let range = m.num_in("range", d.range, |x| x > 0.0, "a positive number of scene units")?;
+        let extent = m.num_in("extent", d.extent, |x| x > 0.0, "a positive number of scene units")?;
+        let uv = match m.string("uv")? {
+            None => d.uv,
+            Some((name, loc)) => {
+                if let Err(why) = isoray_dent::uv::UvMapping::named(name, [-1.0; 3], [1.0; 3]) {
+                    let notes = match isoray_shape::diag::suggest(name, UVS.iter().copied()) {
+                        Some(s) if name != "triplanar" => vec![format!("did you mean \"{s}\"?")],
+                        _ => vec![],
+                    };
+                    return Err(src
+                        .error(
+                            loc.origin,
+                            format!("`{ctx}.uv`: {why}"),
+                            Some("not a one-to-one mapping"),
+                            &notes,
+                        )
+                        .with_key(format!("{ctx}.uv")));
+                }
+                name.to_string()
+            }
+        };
+        m.finish(&["size", "range", "uv", "extent"])?;
+        out.dent_map = DentMapSettings {
+            size,
+            range,
+            uv,
+            extent,
+        };
+    }
+    Ok(out)
+}
+
+/// An object's placement as numbers: its own coordinates q are at
+/// `position` + `scale`·R·q in the world, R turning about x, then y,
+/// then z (world axes, degrees; `rotation`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// Where the object's origin is.
+    pub position: [f64; 3],
+    /// Degrees about x, then y, then z.
+    pub rotation: [f64; 3],
+    /// Uniform scale.
+    pub scale: f64,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Placement {
+            position: [0.0; 3],
+            rotation: [0.0; 3],
+            scale: 1.0,
+        }
+    }
+}
+
+fn rot(axis: usize, deg: f64, v: [f64; 3]) -> [f64; 3] {
+    let (s, c) = deg.to_radians().sin_cos();
+    let (a, b) = match axis {
+        0 => (1, 2),
+        1 => (2, 0),
+        _ => (0, 1),
+    };
+    let mut out = v;
+    out[a] = c * v[a] - s * v[b];
+    out[b] = s * v[a] + c * v[b];
+    out
+}
+
+impl Placement {
+    /// R·v: a direction of the object in the world.
+    pub fn dir_to_world(&self, v: [f64; 3]) -> [f64; 3] {
+        rot(
+            2,
+            self.rotation[2],
+            rot(1, self.rotation[1], rot(0, self.rotation[0], v)),
+        )
+    }
+
+    /// R⁻¹·v: a world direction in the object's axes.
+    pub fn dir_to_local(&self, v: [f64; 3]) -> [f64; 3] {
+        rot(
+            0,
+            -self.rotation[0],
+            rot(1, -self.rotation[1], rot(2, -self.rotation[2], v)),
+        )
+    }
+
+    /// The world point of the object's point q.
+    pub fn to_world(&self, q: [f64; 3]) -> [f64; 3] {
+        let r = self.dir_to_world(q);
+        std::array::from_fn(|i| self.position[i] + self.scale * r[i])
+    }
+
+    /// The object's point at world point p.
+    pub fn to_local(&self, p: [f64; 3]) -> [f64; 3] {
+        let d: [f64; 3] = std::array::from_fn(|i| (p[i] - self.position[i]) / self.scale);
+        self.dir_to_local(d)
+    }
+}
+
+impl crate::Scene {
+    /// Object `i`'s current placement (at the scene's inputs; identity when
+    /// it has none).
+    pub fn placement(&self, i: usize) -> Placement {
+        let Some(t) = &self.objects[i].transform else {
+            return Placement::default();
+        };
+        let v = |k: usize| self.inputs[t.inputs as usize + k];
+        Placement {
+            position: [v(0), v(1), v(2)],
+            rotation: [v(3), v(4), v(5)],
+            scale: v(6),
+        }
+    }
+
+    /// The index of the object named `name`.
+    pub fn object_named(&self, name: &str) -> Option<usize> {
+        self.objects.iter().position(|o| o.name.as_deref() == Some(name))
+    }
+
+    /// Gives each named dentable object (`dents` other than `"none"`) the
+    /// heights of `NAME-height.png` in `dir` where that file exists (its
+    /// normals recomputed); returns the names of those that got maps. An
+    /// error names a file that cannot be read or does not fit the
+    /// object's `dent_map`.
+    pub fn attach_dent_maps(&mut self, dir: &std::path::Path) -> std::result::Result<Vec<String>, String> {
+        if !dir.is_dir() {
+            return Err(format!("{}: no such folder of dent maps", dir.display()));
+        }
+        let mut attached = Vec::new();
+        for (i, o) in self.objects.iter_mut().enumerate() {
+            let Some(name) = o.name.clone() else { continue };
+            if o.physics.dents == DentMode::None {
+                continue;
+            }
+            let (height, _) = isoray_dent::DentMaps::paths(dir, &name);
+            if !height.exists() {
+                continue;
+            }
+            let blank = o
+                .physics
+                .dent_map
+                .blank()
+                .map_err(|e| format!("`object.{i}.dent_map`: {e}"))?;
+            let maps = blank.with_heights_from(dir, &name).map_err(|e| e.to_string())?;
+            o.physics.maps = Some(Arc::new(maps));
+            attached.push(name);
+        }
+        Ok(attached)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn placements_invert_and_turn_about_x_then_y_then_z() {
+        let p = Placement {
+            position: [1.0, 2.0, 3.0],
+            rotation: [30.0, -45.0, 60.0],
+            scale: 2.0,
+        };
+        let q = [0.3, -0.7, 1.1];
+        let back = p.to_local(p.to_world(q));
+        for i in 0..3 {
+            assert!((back[i] - q[i]).abs() < 1e-12);
+        }
+        // 90° about z takes x to y (counter-clockwise seen from +z).
+        let z = Placement {
+            rotation: [0.0, 0.0, 90.0],
+            ..Default::default()
+        };
+        let v = z.dir_to_world([1.0, 0.0, 0.0]);
+        assert!(v[0].abs() < 1e-12 && (v[1] - 1.0).abs() < 1e-12);
+        // 90° about x takes y to z; about y takes z to x.
+        let x = Placement {
+            rotation: [90.0, 0.0, 0.0],
+            ..Default::default()
+        };
+        assert!((x.dir_to_world([0.0, 1.0, 0.0])[2] - 1.0).abs() < 1e-12);
+        let y = Placement {
+            rotation: [0.0, 90.0, 0.0],
+            ..Default::default()
+        };
+        assert!((y.dir_to_world([0.0, 0.0, 1.0])[0] - 1.0).abs() < 1e-12);
+    }
+}

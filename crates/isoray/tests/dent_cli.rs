@@ -1,0 +1,262 @@
+//! End-to-end tests of `isoray dent` and `--maps`: a dent written into the
+//! maps folder at the formula's depth, accumulated over calls, drawn by
+//! `isoray render --maps`; an impulse below the yield leaves the maps
+//! byte for byte; errors name what is wrong.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn isoray(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_isoray"))
+        .args(args)
+        .output()
+        .expect("isoray runs")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("isoray-dent-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// A plate of clay: ε = 0.5 (yield 1 N·s), κ = 0.01, t = 0.1 (KAT 4).
+fn scene() -> PathBuf {
+    let p = tmp("plate.toml");
+    std::fs::write(
+        &p,
+        "[camera]\nposition = [0.0, 1.5, 1.5]\ntarget = [0.0, 0.0, 0.0]\n\
+         [render]\nwidth = 64\nheight = 48\n\
+         [[light]]\nkind = \"directional\"\ndirection = [-0.6, 1.0, 0.3]\n\
+         [material.clay]\nrestitution = 0.5\ndent_compliance = 0.01\nthickness = 0.1\n\
+         [[object]]\nname = \"plate\"\nshape = \"p.y\"\nmaterial = \"clay\"\ndents = \"bump\"\n\
+         dent_map = { size = 128, range = 0.02, uv = \"planar-xz\", extent = 1.0 }\n\
+         [[object]]\nname = \"post\"\nshape = \"box(p, vec3(0.05, 0.3, 0.05))\"\nposition = [0.5, 0.3, 0.5]\n",
+    )
+    .unwrap();
+    p
+}
+
+fn ok(o: &Output) -> String {
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{err}");
+    err
+}
+
+fn height(dir: &Path) -> isoray_dent::HeightMap {
+    isoray_dent::HeightMap::read_png(&dir.join("plate-height.png"), 0.02).unwrap()
+}
+
+#[test]
+fn an_impulse_dents_as_deep_as_the_formula_and_renders() {
+    let (s, maps) = (scene(), tmp("maps-a"));
+    let (s, m) = (s.to_str().unwrap(), maps.to_str().unwrap());
+    // |j| = 4 N·s: 0.1 · 0.01 · (4 − 1) = 0.003 deep (KAT 4).
+    let err = ok(&isoray(&[
+        "dent",
+        s,
+        "plate",
+        "--at",
+        "0,0,0",
+        "--normal",
+        "0,1,0",
+        "--impulse",
+        "4",
+        "--maps",
+        m,
+    ]));
+    assert!(err.contains("dent of 0.003000"), "{err}");
+    let h = height(&maps);
+    // Texel (64, 64) is centred at x = z = 1/128 off the contact: the cap
+    // of the default ball (radius 0.25) is d − r + sqrt(r² − ρ²) there.
+    let centre = -(h.get(64, 64) as f64 - 0.5) * 0.02;
+    let rho2 = 2.0 * (1.0f64 / 128.0).powi(2);
+    let want = 0.003 - 0.25 + (0.0625 - rho2).sqrt();
+    assert!((centre - want).abs() < 1e-6, "{centre} vs {want}");
+    assert!(maps.join("plate-normal.png").exists());
+    // A second impact elsewhere keeps the first dent.
+    ok(&isoray(&[
+        "dent",
+        s,
+        "plate",
+        "--at",
+        "-0.5,0,0.5",
+        "--normal",
+        "0,1,0",
+        "--depth",
+        "0.004",
+        "--maps",
+        m,
+        "-q",
+    ]));
+    let h2 = height(&maps);
+    assert_eq!(h2.get(64, 64), h.get(64, 64));
+    assert!(h2.get(32, 96) < 0.45, "{}", h2.get(32, 96));
+    // Rendered with and without the maps: the dents show.
+    let (a, b) = (tmp("with.png"), tmp("without.png"));
+    ok(&isoray(&["render", s, "--maps", m, "-o", a.to_str().unwrap(), "-q"]));
+    ok(&isoray(&["render", s, "-o", b.to_str().unwrap(), "-q"]));
+    assert!(
+        std::fs::read(&a).unwrap() != std::fs::read(&b).unwrap(),
+        "the dents change the picture"
+    );
+}
+
+#[test]
+fn an_impulse_below_the_yield_leaves_the_maps_byte_for_byte() {
+    let (s, maps) = (scene(), tmp("maps-b"));
+    let (s, m) = (s.to_str().unwrap(), maps.to_str().unwrap());
+    ok(&isoray(&[
+        "dent", s, "plate", "--at", "0,0,0", "--normal", "0,1,0", "--depth", "0.002", "--maps", m, "-q",
+    ]));
+    let before = (
+        std::fs::read(maps.join("plate-height.png")).unwrap(),
+        std::fs::read(maps.join("plate-normal.png")).unwrap(),
+    );
+    let err = ok(&isoray(&[
+        "dent",
+        s,
+        "plate",
+        "--at",
+        "0.3,0,0",
+        "--normal",
+        "0,1,0",
+        "--impulse",
+        "0.99",
+        "--maps",
+        m,
+    ]));
+    assert!(
+        err.contains("dent of 0.000000") && err.contains("0 texels lowered"),
+        "{err}"
+    );
+    let after = (
+        std::fs::read(maps.join("plate-height.png")).unwrap(),
+        std::fs::read(maps.join("plate-normal.png")).unwrap(),
+    );
+    assert!(before == after, "the maps changed below the yield impulse");
+}
+
+#[test]
+fn an_impactor_object_dents_with_its_own_shape() {
+    let (s, maps) = (scene(), tmp("maps-c"));
+    let (s, m) = (s.to_str().unwrap(), maps.to_str().unwrap());
+    // The post's square foot (0.1 × 0.1 at x, z = 0.5) pressed 0.005 in.
+    ok(&isoray(&[
+        "dent",
+        s,
+        "plate",
+        "--at",
+        "0.5,0,0.5",
+        "--normal",
+        "0,1,0",
+        "--depth",
+        "0.005",
+        "--impactor",
+        "post",
+        "--maps",
+        m,
+        "-q",
+    ]));
+    let h = height(&maps);
+    let texel = |x: f64, z: f64| (((x + 1.0) / 2.0 * 128.0) as u32, ((z + 1.0) / 2.0 * 128.0) as u32);
+    let depth = |(x, y): (u32, u32)| -(h.get(x, y) as f64 - 0.5) * 0.02;
+    assert!((depth(texel(0.5, 0.5)) - 0.005).abs() < 1e-4);
+    assert!((depth(texel(0.53, 0.47)) - 0.005).abs() < 1e-4, "flat-bottomed");
+    assert!(depth(texel(0.6, 0.5)).abs() < 1e-6, "outside the foot");
+}
+
+#[test]
+fn bad_dents_get_clear_errors() {
+    let (s, maps) = (scene(), tmp("maps-d"));
+    let (s, m) = (s.to_str().unwrap(), maps.to_str().unwrap());
+    for (args, code, want) in [
+        (
+            vec![
+                "dent", s, "lid", "--at", "0,0,0", "--normal", "0,1,0", "--depth", "0.01", "--maps", m,
+            ],
+            2,
+            "no object named `lid` (named objects: plate, post)",
+        ),
+        (
+            vec![
+                "dent", s, "post", "--at", "0,0,0", "--normal", "0,1,0", "--depth", "0.01", "--maps", m,
+            ],
+            2,
+            "object `post` is not dentable",
+        ),
+        (
+            vec!["dent", s, "plate", "--at", "0,0,0", "--normal", "0,1,0", "--maps", m],
+            2,
+            "give the dent's --depth D",
+        ),
+        (
+            vec![
+                "dent",
+                s,
+                "plate",
+                "--at",
+                "0,0,0",
+                "--normal",
+                "0,1,0",
+                "--depth",
+                "0.01",
+                "--impulse",
+                "3",
+                "--maps",
+                m,
+            ],
+            2,
+            "not both",
+        ),
+        (
+            vec![
+                "dent", s, "plate", "--at", "0,0", "--normal", "0,1,0", "--depth", "0.01", "--maps", m,
+            ],
+            2,
+            "--at: expected three numbers",
+        ),
+        (
+            vec![
+                "dent", s, "plate", "--at", "0,0,0", "--normal", "0,0,0", "--depth", "0.01", "--maps", m,
+            ],
+            2,
+            "nonzero",
+        ),
+        (
+            vec![
+                "dent", s, "plate", "--at", "0,0,0", "--normal", "0,1,0", "--depth", "0.01",
+            ],
+            2,
+            "needs --maps DIR",
+        ),
+        (
+            vec![
+                "dent",
+                s,
+                "plate",
+                "--at",
+                "0,0,0",
+                "--normal",
+                "0,1,0",
+                "--depth",
+                "0.01",
+                "--imprint",
+                "xray",
+                "--maps",
+                m,
+            ],
+            2,
+            "--imprint xray",
+        ),
+        (
+            vec!["render", s, "--maps", "/nonexistent/maps", "-o", "/tmp/x.png"],
+            1,
+            "no such folder",
+        ),
+    ] {
+        let o = isoray(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+}
