@@ -114,6 +114,30 @@ pub fn texels_near(mapping: &UvMapping, w: u32, h: u32, reach: Sphere) -> Vec<Re
     }
 }
 
+/// A bounding sphere of the part of impactor `b` near a contact: from
+/// `start` (a point inside `b`, near the contact), the farthest of its
+/// exits along 26 directions (capped at `cap`), plus `margin`. Exact for a
+/// ball whose centre is `start`; a generous bound for convex impactors
+/// seen from inside.
+pub fn reach_of(b: &dyn Field, start: V3, cap: f64, margin: f64) -> Sphere {
+    let mut r: f64 = 0.0;
+    for dx in -1..=1 {
+        for dy in -1..=1 {
+            for dz in -1..=1 {
+                if (dx, dy, dz) == (0, 0, 0) {
+                    continue;
+                }
+                let d = normalize([dx as f64, dy as f64, dz as f64]);
+                r = r.max(exit(b, start, d, cap, March::default()));
+            }
+        }
+    }
+    Sphere {
+        centre: start,
+        radius: r + margin,
+    }
+}
+
 /// The side of the smallest blocks of texels the texel imprint skips at once.
 const BLOCK: u32 = 8;
 

@@ -1317,6 +1317,46 @@ impl Scene {
         self.apply_inputs(next, changed, values)
     }
 
+    /// Moves object `i` to `placement` (the simulation does, each step):
+    /// its seven placement inputs are set as given, nothing recompiles. An
+    /// error when the object has no placement inputs (give it a
+    /// `position`, or a moving `body`) or the scale is not positive.
+    pub fn set_placement(&mut self, i: usize, placement: crate::physics::Placement) -> Result<(), crate::SceneError> {
+        let Some(tr) = self.objects.get(i).and_then(|o| o.transform.as_ref()) else {
+            return Err(crate::SceneError::usage(format!(
+                "`object.{i}` cannot be moved: it has no placement (give it a `position`)"
+            )));
+        };
+        let v = placement;
+        if !(v.scale > 0.0 && v.scale.is_finite()) || v.position.iter().chain(&v.rotation).any(|x| !x.is_finite()) {
+            return Err(crate::SceneError::usage(format!(
+                "`object.{i}`: a placement needs finite numbers and a positive scale, found {v:?}"
+            )));
+        }
+        let values = [
+            v.position[0],
+            v.position[1],
+            v.position[2],
+            v.rotation[0],
+            v.rotation[1],
+            v.rotation[2],
+            v.scale,
+        ];
+        let mut next = self.inputs.clone();
+        let mut changed = Vec::new();
+        for (k, x) in values.into_iter().enumerate() {
+            let at = tr.inputs as usize + k;
+            if next[at].to_bits() != x.to_bits() {
+                next[at] = x;
+                changed.push(at as u32);
+            }
+        }
+        if changed.is_empty() {
+            return Ok(());
+        }
+        self.apply_inputs(next, changed, None)
+    }
+
     /// Stores parameter values that tracks set.
     fn store_params(&mut self, params: Vec<(String, Value)>) {
         for (name, value) in params {

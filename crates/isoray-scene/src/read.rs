@@ -511,9 +511,15 @@ impl<'a> Build<'a> {
                     };
                     let physics = crate::physics::read_object_physics(src, &mut r, &format!("object.{i}"))?;
                     r.finish_keys(object_keys())?;
-                    // Placed in the file, or by a track (which needs the inputs).
+                    // Placed in the file, by a track or by the simulation
+                    // (which need the inputs).
+                    let moves = matches!(
+                        physics.body,
+                        crate::physics::BodyKind::Dynamic | crate::physics::BodyKind::Kinematic
+                    );
                     let transform =
-                        if placement.iter().any(|(_, v)| v.is_some()) || placed.contains(&i) || bone.is_some() {
+                        if placement.iter().any(|(_, v)| v.is_some()) || placed.contains(&i) || bone.is_some() || moves
+                        {
                             let mut values: Vec<Shape> = Vec::with_capacity(7);
                             for (key, v) in &placement {
                                 let ctx = format!("object.{i}.{key}");

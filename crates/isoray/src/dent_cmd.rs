@@ -256,30 +256,7 @@ pub(crate) fn cmd_dent(a: &DentArgs) -> Result<(), Failure> {
                 at[2] - n[2] * depth * 0.5,
             ];
             let cap = 4.0 * obj.physics.dent_map.extent * s;
-            let mut r: f64 = depth;
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        if (dx, dy, dz) == (0, 0, 0) {
-                            continue;
-                        }
-                        let d = [dx as f64, dy as f64, dz as f64];
-                        let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                        let d = d.map(|c| c / l);
-                        r = r.max(isoray_dent::field::exit(
-                            &|p: [f64; 3]| b_world(p),
-                            start,
-                            d,
-                            cap,
-                            March::default(),
-                        ));
-                    }
-                }
-            }
-            Sphere {
-                centre: start,
-                radius: r + depth,
-            }
+            isoray_dent::imprint::reach_of(&|p: [f64; 3]| b_world(p), start, cap, depth)
         }
     };
     let reach = Sphere {

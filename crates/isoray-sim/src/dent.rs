@@ -1,0 +1,154 @@
+//! An impact's dents: for each dentable object of the pair (`dents =
+//! "bump"` or `"auto"`), the thesis's model decides the depth
+//! (t·κ·max(0, |j| − ε/(1 − ε)) with the struck object's material), and the
+//! other object, pushed that deep into it, is imprinted into its height map.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use isoray_dent::field::March;
+use isoray_dent::imprint::{imprint_ortho, imprint_texel, reach_of, OrthoOptions, Sphere};
+use isoray_dent::Rect;
+use isoray_scene::{DentMode, Scene};
+
+use crate::Impact;
+
+/// How the depth is measured (`--imprint`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ImprintMethod {
+    /// Along the struck surface's normal, texel by texel (isoray's).
+    #[default]
+    Texel,
+    /// The thesis's orthographic depth passes along the impact.
+    Ortho,
+    /// Those, scaled by N·N_C.
+    OrthoProjected,
+}
+
+/// What an impact did to one of its objects.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DentRecord {
+    /// The struck object.
+    pub object: usize,
+    /// The object that struck it.
+    pub impactor: usize,
+    /// Its yield impulse ε/(1 − ε), N·s.
+    pub yield_impulse: f64,
+    /// The dent's depth t·κ·max(0, |j| − Y), scene units (0: no dent).
+    pub depth: f64,
+    /// Texels lowered.
+    pub texels: u64,
+    /// The rectangle of the height map written.
+    pub rect: Option<Rect>,
+    /// Texels saturated (clamped at the bottom of the map's range) so far.
+    pub saturated: u64,
+    /// The imprint's time, ms.
+    pub imprint_ms: f64,
+    /// The normal map's update, ms.
+    pub normals_ms: f64,
+}
+
+/// Dents the dentable objects of `impact` in `scene` (their maps created
+/// when they have none), the impactor at its pose in `scene` pushed so
+/// that it overlaps the struck object by the dent's depth. Returns one
+/// record per dentable object of the pair (depth 0 below the yield or for
+/// a separating contact).
+pub fn dent_impact(scene: &mut Scene, impact: &Impact, method: ImprintMethod) -> Vec<DentRecord> {
+    let mut out = Vec::new();
+    for (struck, other, sign) in [(impact.a, impact.b, 1.0), (impact.b, impact.a, -1.0)] {
+        let o = &scene.objects[struck];
+        if !matches!(o.physics.dents, DentMode::Bump | DentMode::Auto) {
+            continue;
+        }
+        let material = &scene.materials[o.material];
+        let y = isoray_dent::impulse::yield_impulse(material.restitution);
+        let depth = if impact.approaching {
+            isoray_dent::impulse::dent_depth(
+                material.thickness,
+                material.dent_compliance,
+                impact.impulse,
+                material.restitution,
+            )
+        } else {
+            0.0
+        };
+        let mut record = DentRecord {
+            object: struck,
+            impactor: other,
+            yield_impulse: y,
+            depth,
+            texels: 0,
+            rect: None,
+            saturated: 0,
+            imprint_ms: 0.0,
+            normals_ms: 0.0,
+        };
+        if depth <= 0.0 {
+            out.push(record);
+            continue;
+        }
+        let Ok(mut maps) = o
+            .physics
+            .maps
+            .as_deref()
+            .cloned()
+            .map_or_else(|| o.physics.dent_map.blank(), Ok)
+        else {
+            out.push(record);
+            continue;
+        };
+        // The normal from the struck object towards the impactor.
+        let n = impact.normal.map(|c| c * sign);
+        let shift = depth - impact.penetration;
+        let place = scene.placement(struck);
+        let s = place.scale;
+        let inputs = &scene.inputs;
+        let a_shape = &o.shape;
+        let b_shape = &scene.objects[other].shape;
+        let a_local = |q: [f64; 3]| a_shape.eval_with(inputs, place.to_world(q)) / s;
+        let b_world =
+            |p: [f64; 3]| b_shape.eval_with(inputs, [p[0] + n[0] * shift, p[1] + n[1] * shift, p[2] + n[2] * shift]);
+        let b_local = |q: [f64; 3]| b_world(place.to_world(q)) / s;
+        let start: [f64; 3] = std::array::from_fn(|k| impact.point[k] - n[k] * 0.5 * depth);
+        let cap = 4.0 * o.physics.dent_map.extent * s;
+        let reach_world = reach_of(&b_world, start, cap, depth);
+        let reach = Sphere {
+            centre: place.to_local(reach_world.centre),
+            radius: reach_world.radius / s,
+        };
+        let mapping = maps.mapping.clone();
+        let started = Instant::now();
+        let imprint = match method {
+            ImprintMethod::Texel => {
+                imprint_texel(&mut maps.height, &mapping, &a_local, &b_local, reach, March::default())
+            }
+            ImprintMethod::Ortho | ImprintMethod::OrthoProjected => {
+                let pixel = o.physics.dent_map.extent / maps.height.width() as f64;
+                imprint_ortho(
+                    &mut maps.height,
+                    &mapping,
+                    &a_local,
+                    &b_local,
+                    place.to_local(impact.point),
+                    place.dir_to_local(n),
+                    reach,
+                    pixel,
+                    OrthoOptions {
+                        project_on_normal: method == ImprintMethod::OrthoProjected,
+                    },
+                    March::default(),
+                )
+            }
+        };
+        record.imprint_ms = started.elapsed().as_secs_f64() * 1e3;
+        let started = Instant::now();
+        maps.update_normals();
+        record.normals_ms = started.elapsed().as_secs_f64() * 1e3;
+        record.texels = imprint.lowered;
+        record.rect = imprint.rect;
+        record.saturated = maps.height.saturated();
+        scene.objects[struck].physics.maps = Some(Arc::new(maps));
+        out.push(record);
+    }
+    out
+}

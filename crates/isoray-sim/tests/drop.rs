@@ -1,0 +1,131 @@
+//! The thesis's scene: a ball dropped on a fixed plane (dents.md §2.5,
+//! KATs 2–4 end to end). The ball falls as gravity says, strikes at
+//! sqrt(2gh) with the elastic impulse 2mv, dents the plane exactly as
+//! deep as t·κ·(|j| − Y) above the threshold and not at all below it, and
+//! the same scene always gives the same impacts.
+
+use isoray_sim::{dent_impact, ImprintMethod, Simulation};
+
+/// A plane of clay (ε = 0.5: Y = 1 N·s; t = 0.1, κ = 0.01) and a ball of
+/// radius 0.1 whose bottom is `h` above it, of 1 kg.
+fn scene(h: f64) -> isoray_scene::Scene {
+    let density = 1.0 / (4.0 / 3.0 * std::f64::consts::PI * 0.001);
+    let text = format!(
+        "[physics]\ngravity = [0.0, -9.81, 0.0]\ntimestep = 0.0005\n\
+         [material.clay]\nrestitution = 0.5\ndent_compliance = 0.01\nthickness = 0.1\n\
+         [material.steel]\nrestitution = 0.9\ndensity = {density}\n\
+         [[object]]\nname = \"plane\"\nshape = \"p.y\"\nmaterial = \"clay\"\nbody = \"fixed\"\ndents = \"bump\"\n\
+         dent_map = {{ size = 256, range = 0.02, uv = \"planar-xz\", extent = 0.5 }}\n\
+         [[object]]\nname = \"ball\"\nshape = \"sphere(p, 0.1)\"\nmaterial = \"steel\"\nposition = [0.0, {}, 0.0]\nbody = \"dynamic\"\n",
+        0.1 + h
+    );
+    isoray_scene::load_str(&text, "drop.toml", &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Runs until the first impact (or `max` seconds); the scene follows.
+fn first_impact(s: &mut isoray_scene::Scene, max: f64) -> Option<isoray_sim::Impact> {
+    let mut sim = Simulation::new(s).unwrap();
+    while sim.time() < max {
+        let impacts = sim.step();
+        sim.place(s).unwrap();
+        if let Some(i) = impacts.into_iter().next() {
+            return Some(i);
+        }
+    }
+    None
+}
+
+#[test]
+fn a_ball_falls_as_gravity_says() {
+    let mut s = scene(1.0);
+    let mut sim = Simulation::new(&s).unwrap();
+    assert!((sim.mass(1).unwrap() - 1.0).abs() < 1e-3, "{:?}", sim.mass(1));
+    assert_eq!(sim.mass(0), Some(f64::INFINITY));
+    let n = 400;
+    for _ in 0..n {
+        assert!(sim.step().is_empty());
+    }
+    sim.place(&mut s).unwrap();
+    // y = y0 − g·t²/2 (within what the integrator's steps leave).
+    let t = n as f64 * 0.0005;
+    let want = 1.1 - 9.81 * t * t / 2.0;
+    let y = s.placement(1).position[1];
+    assert!((y - want).abs() < 1e-3, "{y} vs {want}");
+    // The scene moved with it: the ball's surface is 0.1 below its centre.
+    assert!(s.distance([0.0, y - 0.1, 0.0]).abs() < 1e-4);
+}
+
+#[test]
+fn the_impact_speed_and_impulse_are_the_drops() {
+    for h in [0.05, 0.2, 0.5] {
+        let mut s = scene(h);
+        let i = first_impact(&mut s, 2.0).expect("an impact");
+        let v = (2.0 * 9.81 * h).sqrt();
+        assert_eq!((i.a, i.b), (0, 1));
+        assert!(i.approaching);
+        assert!((i.normal[1] - 1.0).abs() < 1e-5, "{:?}", i.normal);
+        let speed = -i.velocities[1][1];
+        assert!((speed - v).abs() < 0.01 * v + 9.81 * 0.0005, "h {h}: {speed} vs {v}");
+        // j = 2mv on a fixed plane (KAT 2).
+        assert!(
+            (i.impulse - 2.0 * speed).abs() < 1e-4,
+            "{} vs {}",
+            i.impulse,
+            2.0 * speed
+        );
+        assert_eq!(i.inverse_masses[0], 0.0);
+    }
+}
+
+#[test]
+fn a_drop_dents_the_plane_only_above_the_threshold() {
+    // KAT 3: the threshold is 0.5 m/s, a drop of 12.7 mm.
+    let mut low = scene(0.008);
+    let i = first_impact(&mut low, 2.0).unwrap();
+    let rec = dent_impact(&mut low, &i, ImprintMethod::Texel);
+    assert_eq!(rec.len(), 1);
+    assert_eq!((rec[0].depth, rec[0].texels), (0.0, 0));
+    assert!(
+        low.objects[0].physics.maps.is_none(),
+        "no map written below the threshold"
+    );
+    // KAT 4: above it, the centre of the dent is t·κ·(|j| − Y) deep.
+    let mut high = scene(0.2);
+    let i = first_impact(&mut high, 2.0).unwrap();
+    let rec = dent_impact(&mut high, &i, ImprintMethod::Texel);
+    let want = 0.1 * 0.01 * (i.impulse - 1.0);
+    assert!(
+        (rec[0].depth - want).abs() < 1e-12 && want > 0.002,
+        "{} vs {want}",
+        rec[0].depth
+    );
+    assert!(rec[0].texels > 20);
+    let maps = high.objects[0].physics.maps.as_ref().unwrap();
+    // The deepest texel, near the contact (0, 0, 0) at texel (128, 128).
+    let mut deepest: f64 = 0.0;
+    for y in 120..136 {
+        for x in 120..136 {
+            deepest = deepest.max(-maps.height.displacement(x, y));
+        }
+    }
+    assert!((deepest - want).abs() < 0.02 * want, "{deepest} vs {want}");
+}
+
+#[test]
+fn the_same_scene_gives_the_same_impacts() {
+    let run = || {
+        let mut s = scene(0.3);
+        let mut sim = Simulation::new(&s).unwrap();
+        let mut all = Vec::new();
+        for _ in 0..2000 {
+            all.extend(sim.step());
+        }
+        sim.place(&mut s).unwrap();
+        (format!("{all:?}"), s.placement(1))
+    };
+    let (a, pa) = run();
+    let (b, pb) = run();
+    assert!(a.contains("Impact"), "the ball bounced");
+    assert_eq!(a, b);
+    assert_eq!(pa, pb);
+}
