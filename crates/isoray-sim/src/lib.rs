@@ -22,6 +22,7 @@ use isoray_scene::{BodyKind, Collider, Placement, Scene};
 use rapier3d::prelude::*;
 
 mod dent;
+pub mod run;
 pub use dent::{dent_impact, DentRecord, ImprintMethod};
 
 /// Errors building a simulation.

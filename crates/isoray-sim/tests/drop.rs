@@ -129,3 +129,69 @@ fn the_same_scene_gives_the_same_impacts() {
     assert_eq!(a, b);
     assert_eq!(pa, pb);
 }
+
+/// A run's record replayed without physics gives the same dents and the
+/// same placements at every frame; the record survives its JSON file.
+#[test]
+fn a_recorded_run_replays_to_the_same_dents_and_frames() {
+    use isoray_sim::run::{replay, run, Record, RunOptions};
+    #[derive(Debug)]
+    struct E(String);
+    impl From<isoray_sim::SimError> for E {
+        fn from(e: isoray_sim::SimError) -> E {
+            E(e.to_string())
+        }
+    }
+    impl From<isoray_scene::SceneError> for E {
+        fn from(e: isoray_scene::SceneError) -> E {
+            E(e.rendered)
+        }
+    }
+    let opts = RunOptions {
+        duration: 0.6,
+        fps: 30.0,
+        dents: None,
+        imprint: ImprintMethod::Texel,
+    };
+    let mut s = scene(0.3);
+    let mut seen = Vec::new();
+    let record = run(&mut s, &opts, |n, sc: &isoray_scene::Scene| -> Result<(), E> {
+        seen.push((n, sc.placement(1)));
+        Ok(())
+    })
+    .unwrap_or_else(|e| panic!("{}", e.0));
+    assert_eq!(seen.len(), 18);
+    let dents: Vec<_> = record
+        .impacts
+        .iter()
+        .filter(|i| i.dents.iter().any(|d| d.depth > 0.0))
+        .collect();
+    assert!(!dents.is_empty(), "{:?}", record.impacts);
+    let path = std::env::temp_dir().join(format!("isoray-sim-record-{}.json", std::process::id()));
+    record.write(&path).unwrap();
+    let back = Record::read(&path).unwrap();
+    assert_eq!(back, record);
+    let mut fresh = scene(0.3);
+    let mut again = Vec::new();
+    replay(
+        &mut fresh,
+        &back,
+        &opts,
+        |n, sc: &isoray_scene::Scene| -> Result<(), E> {
+            again.push((n, sc.placement(1)));
+            Ok(())
+        },
+    )
+    .unwrap();
+    assert_eq!(again, seen);
+    let (a, b) = (
+        s.objects[0].physics.maps.as_ref().unwrap(),
+        fresh.objects[0].physics.maps.as_ref().unwrap(),
+    );
+    assert_eq!(a.height, b.height);
+    assert_eq!(a.normals, b.normals);
+    // A file that is not a record says where.
+    std::fs::write(&path, "{\"timestep\": 0.1, \"fps\": }").unwrap();
+    let e = Record::read(&path).unwrap_err();
+    assert!(e.contains(":1:") && e.contains("isoray simulate --record"), "{e}");
+}
