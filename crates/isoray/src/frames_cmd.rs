@@ -127,7 +127,7 @@ impl Engine {
 }
 
 /// A progress bar over frames, on a terminal.
-fn frame_bar(total: u64, quiet: bool) -> Option<indicatif::ProgressBar> {
+pub(crate) fn frame_bar(total: u64, quiet: bool) -> Option<indicatif::ProgressBar> {
     use std::io::IsTerminal;
     if quiet || !std::io::stderr().is_terminal() {
         return None;

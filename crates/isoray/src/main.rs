@@ -6,6 +6,8 @@ mod dent_cmd;
 mod frames_cmd;
 #[cfg(feature = "gpu")]
 mod gpu_cmd;
+#[cfg(feature = "physics")]
+mod simulate_cmd;
 #[cfg(feature = "gpu")]
 use gpu_cmd::render_gpu;
 mod jobs;
@@ -33,7 +35,7 @@ struct Cli {
 
 /// Which renderer `isoray render` uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum Backend {
+pub(crate) enum Backend {
     /// The CPU sphere tracer (isoray-render).
     Cpu,
     /// The GPU sphere tracer (isoray-gpu, through wgpu and Vulkan).
@@ -151,6 +153,46 @@ enum Command {
         #[arg(long, value_name = "X0,Y0,X1,Y1")]
         rect: Option<String>,
         /// No summary.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// Run the scene's rigid bodies (rapier; a build with `--features
+    /// physics`): impacts dent what they strike (docs/DENTS.md), frames are
+    /// rendered at --fps (OUT as for `render --frames`: a %04d pattern,
+    /// .gif, .apng or .mp4), the final maps written to --maps DIR, the run
+    /// recorded to --record and replayed, without physics, by --replay.
+    Simulate {
+        #[command(flatten)]
+        input: SceneArgs,
+        /// The frames: frame_%04d.png, .gif, .apng or .mp4.
+        #[arg(short, long, value_name = "FRAMES")]
+        output: PathBuf,
+        /// Seconds simulated (default: [physics] duration).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Frames per second (default: [animation] fps, else 30).
+        #[arg(long)]
+        fps: Option<f64>,
+        /// The renderer of the frames.
+        #[arg(long, default_value = "trace", value_name = "trace|raster|gpu")]
+        renderer: String,
+        /// Overrides every dentable object's `dents`.
+        #[arg(long, value_name = "none|bump|sdf|auto")]
+        dents: Option<String>,
+        /// How dents are measured: texel (along the surface normal), ortho
+        /// (the thesis's) or ortho-projected.
+        #[arg(long, default_value = "texel", value_name = "texel|ortho|ortho-projected")]
+        imprint: String,
+        /// Write the run's record (every impact, every frame's placements) as JSON.
+        #[arg(long, value_name = "impacts.json")]
+        record: Option<PathBuf>,
+        /// Replay a record instead of simulating: the same dents and frames.
+        #[arg(long, value_name = "impacts.json")]
+        replay: Option<PathBuf>,
+        /// Worker threads of the CPU renderer (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// No progress bar and no summary.
         #[arg(short, long)]
         quiet: bool,
     },
@@ -559,6 +601,36 @@ fn main() -> ExitCode {
             rect: rect.as_deref(),
             quiet,
         }),
+        #[cfg(feature = "physics")]
+        Command::Simulate {
+            input,
+            output,
+            duration,
+            fps,
+            renderer,
+            dents,
+            imprint,
+            record,
+            replay,
+            threads,
+            quiet,
+        } => simulate_cmd::cmd_simulate(&simulate_cmd::SimulateArgs {
+            input: &input,
+            output: &output,
+            duration,
+            fps,
+            renderer: &renderer,
+            dents: dents.as_deref(),
+            imprint: &imprint,
+            record: record.as_deref(),
+            replay: replay.as_deref(),
+            threads,
+            quiet,
+        }),
+        #[cfg(not(feature = "physics"))]
+        Command::Simulate { .. } => Err(io_failure(
+            "this isoray was built without rigid bodies; build it with `cargo build --release -p isoray --features physics`".into(),
+        )),
         Command::Dent {
             input,
             object,

@@ -1,7 +1,11 @@
-//! End-to-end tests of `isoray dent` and `--maps`: a dent written into the
-//! maps folder at the formula's depth, accumulated over calls, drawn by
-//! `isoray render --maps`; an impulse below the yield leaves the maps
-//! byte for byte; errors name what is wrong.
+//! End-to-end tests of `isoray dent`, `--maps` and `isoray simulate`: a
+//! dent written into the maps folder at the formula's depth, accumulated
+//! over calls, drawn by `isoray render --maps`; an impulse below the yield
+//! leaves the maps byte for byte; errors name what is wrong. `simulate`
+//! without the `physics` feature says how to get it; with it, a ball
+//! dropped on the dentable plane of examples/dents.toml dents it, and
+//! replaying the run's record writes the same frames and maps byte for
+//! byte.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -259,4 +263,62 @@ fn bad_dents_get_clear_errors() {
         assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
         assert!(err.contains(want), "{args:?}: {err}");
     }
+}
+
+fn example() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/dents.toml")
+        .to_string_lossy()
+        .into_owned()
+}
+
+#[test]
+#[cfg(not(feature = "physics"))]
+fn without_physics_it_says_how_to_build_it() {
+    let o = isoray(&["simulate", &example(), "-o", tmp("x_%04d.png").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--features physics"));
+}
+
+#[test]
+#[cfg(feature = "physics")]
+fn a_drop_dents_the_plane_and_a_replay_gives_the_same_bytes() {
+    let small = [
+        "--set",
+        "render.width=48",
+        "--set",
+        "render.height=27",
+        "--fps",
+        "10",
+        "--duration",
+        "0.6",
+    ];
+    let run = |dir: &str, extra: &[&str]| {
+        let frames = tmp(&format!("{dir}/f_%04d.png"));
+        let maps = tmp(&format!("{dir}/maps"));
+        let mut args: Vec<String> = vec![
+            "simulate".into(),
+            example(),
+            "-o".into(),
+            frames.to_string_lossy().into_owned(),
+        ];
+        args.extend(small.iter().map(|s| s.to_string()));
+        args.extend(["--maps".into(), maps.to_string_lossy().into_owned(), "-q".into()]);
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = isoray(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let bytes = |p: PathBuf| std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        let frames: Vec<Vec<u8>> = (0..6).map(|n| bytes(tmp(&format!("{dir}/f_{n:04}.png")))).collect();
+        (frames, bytes(maps.join("plane-height.png")))
+    };
+    let record = tmp("rec.json");
+    let (frames, height) = run("a", &["--record", record.to_str().unwrap()]);
+    let text = std::fs::read_to_string(&record).unwrap();
+    assert!(text.contains("\"impacts\"") && text.contains("\"yield\""), "{text}");
+    let h = image::open(tmp("a/maps/plane-height.png")).unwrap().into_luma16();
+    assert!(h.pixels().any(|p| p.0[0] < 32000), "the plane was dented");
+    let (again, height2) = run("b", &["--replay", record.to_str().unwrap()]);
+    assert!(frames == again, "replayed frames differ");
+    assert!(height == height2, "replayed maps differ");
 }
