@@ -293,6 +293,27 @@ fn v3(p: DVec3) -> Vec3 {
 }
 
 impl Ctx<'_> {
+    /// The shading normal of triangle `t` at barycentric `b` (point `p`,
+    /// seen from `viewer`): the vertex normals interpolated, tilted by the
+    /// object's dent maps, and kept on the side of the surface the
+    /// interpolated normal is (a steep dent wall tilted past the line of
+    /// sight would otherwise read as the surface's inside).
+    fn normal_at(&self, t: usize, b: [f64; 3], p: DVec3, viewer: DVec3) -> DVec3 {
+        let n = self.tris.normal(t, b).as_dvec3();
+        let Some(w) = self
+            .scene
+            .dent_normal(self.tris.object[t] as usize, p.to_array(), n.to_array())
+        else {
+            return n;
+        };
+        let (w, d) = (DVec3::from_array(w), (p - viewer).normalize_or_zero());
+        let side = n.dot(d);
+        if w.dot(d) * side > 0.0 {
+            return w;
+        }
+        (w - d * w.dot(d) + d * (1e-3 * side.signum())).normalize_or_zero()
+    }
+
     /// The render's cancel token, which map searches check.
     fn cancel(&self) -> Option<&isoray_job::CancelToken> {
         self.opts.cancel.as_ref()
@@ -368,7 +389,7 @@ impl Ctx<'_> {
     fn secondary(&self, tri: u32, p: DVec3, viewer: DVec3) -> Vec3 {
         let t = tri as usize;
         let b = self.tris.barycentric(t, p);
-        let mut n = self.tris.normal(t, b).as_dvec3();
+        let mut n = self.normal_at(t, b, p, viewer);
         let d = (p - viewer).normalize_or_zero();
         if n.dot(d) > 0.0 {
             n = -n;
@@ -498,7 +519,7 @@ impl Ctx<'_> {
     fn surface_color(&self, tri: u32, b: [f64; 3], viewer: DVec3) -> Vec3 {
         let t = tri as usize;
         let p = self.tris.point(t, b);
-        let mut n = self.tris.normal(t, b).as_dvec3();
+        let mut n = self.normal_at(t, b, p, viewer);
         self.color_at(tri, p, &mut n, viewer)
     }
 
@@ -752,7 +773,7 @@ fn probes(ctx: &Ctx, g: &[GPixel], eye: DVec3, cancel: Option<&isoray_job::Cance
             }
             let t = px.tri as usize;
             let p = ctx.tris.point(t, px.bary);
-            let mut n = ctx.tris.normal(t, px.bary).as_dvec3();
+            let mut n = ctx.normal_at(t, px.bary, p, eye);
             let d = (p - eye).normalize_or_zero();
             let inside = n.dot(d) > 0.0;
             if inside {

@@ -373,6 +373,32 @@ impl crate::Scene {
         }
     }
 
+    /// The normal at world point `p` of object `object` whose undented
+    /// normal there is `n`, tilted by its dent maps (`dents = "bump"` or
+    /// `"auto"`): the height map's normal in the tangent frame of its uv
+    /// mapping, in full precision. None where the object has no maps, or
+    /// `p` is off the mapped side or region: the normal is then `n`.
+    pub fn dent_normal(&self, object: usize, p: [f64; 3], n: [f64; 3]) -> Option<[f64; 3]> {
+        let o = self.objects.get(object)?;
+        if !matches!(o.physics.dents, DentMode::Bump | DentMode::Auto) {
+            return None;
+        }
+        let maps = o.physics.maps.as_ref()?;
+        let place = self.placement(object);
+        let q = place.to_local(p);
+        let nl = place.dir_to_local(n);
+        if !maps.mapping.faces(q, nl) {
+            return None;
+        }
+        let uv = maps.mapping.uv(q)?;
+        let (t, b) = maps.mapping.frame(q, nl);
+        let ts = maps.normal_at(uv);
+        let local: [f64; 3] = std::array::from_fn(|i| ts[0] * t[i] + ts[1] * b[i] + ts[2] * nl[i]);
+        let w = place.dir_to_world(local);
+        let l = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        (l > 0.0 && l.is_finite()).then(|| w.map(|c| c / l))
+    }
+
     /// The index of the object named `name`.
     pub fn object_named(&self, name: &str) -> Option<usize> {
         self.objects.iter().position(|o| o.name.as_deref() == Some(name))
