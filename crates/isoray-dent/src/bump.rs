@@ -5,18 +5,7 @@
 //! atan(‖F_v P_u − F_u P_v‖ / ‖N‖) for λ = 1.
 
 use crate::impulse::V3;
-
-fn cross(a: V3, b: V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: V3) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-}
+use crate::vec::{cross, length as norm};
 
 /// N' = N + λ·[F_u (N × P_v) − F_v (N × P_u)] / ‖N‖ (unnormalised), with
 /// N = P_u × P_v.

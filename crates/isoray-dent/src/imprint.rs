@@ -25,6 +25,34 @@ use crate::impulse::V3;
 use crate::uv::UvMapping;
 use crate::vec::{along, cross, dot, length, normalize, scale, sub};
 
+/// How an impact's depth is measured (`--imprint`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ImprintMethod {
+    /// Along the struck surface's normal, texel by texel (isoray's): [`imprint_texel`].
+    #[default]
+    Texel,
+    /// The thesis's orthographic depth passes along the impact: [`imprint_ortho`].
+    Ortho,
+    /// Those, scaled by N·N_C.
+    OrthoProjected,
+}
+
+impl ImprintMethod {
+    /// The names of the methods, as `--imprint` takes them.
+    pub const NAMES: &'static str =
+        "texel (along the surface normal), ortho (the thesis's) or ortho-projected (the thesis's with its N·N_C fix)";
+
+    /// The method named `texel`, `ortho` or `ortho-projected`.
+    pub fn from_name(name: &str) -> Option<ImprintMethod> {
+        match name {
+            "texel" => Some(ImprintMethod::Texel),
+            "ortho" => Some(ImprintMethod::Ortho),
+            "ortho-projected" => Some(ImprintMethod::OrthoProjected),
+            _ => None,
+        }
+    }
+}
+
 /// A bounding sphere (of the impactor at its pushed pose).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sphere {
@@ -68,10 +96,9 @@ pub fn texels_near(mapping: &UvMapping, w: u32, h: u32, reach: Sphere) -> Vec<Re
     match *mapping {
         UvMapping::Planar { .. } => {
             // The sphere's shadow on the picture: its centre's uv ± its radius.
-            let Some(extent) = planar_extent(mapping) else {
+            let (Some(extent), Some(c)) = (planar_extent(mapping), mapping.planar_uv(reach.centre)) else {
                 return all;
             };
-            let c = planar_uv_unclamped(mapping, reach.centre);
             let (du, dv) = (reach.radius / extent[0], reach.radius / extent[1]);
             let (x0, x1) = texel_range(c[0] - du, c[0] + du, w);
             let (y0, y1) = texel_range(c[1] - dv, c[1] + dv, h);
@@ -147,20 +174,6 @@ fn planar_extent(m: &UvMapping) -> Option<[f64; 2]> {
         UvMapping::Planar { min, max, .. } => Some([max[0] - min[0], max[1] - min[1]]),
         _ => None,
     }
-}
-
-/// A planar mapping's (u, v) of p, unclamped.
-fn planar_uv_unclamped(m: &UvMapping, p: V3) -> [f64; 2] {
-    // Push p onto the rectangle's plane range by evaluating the mapping's
-    // affine map through its line at two corners.
-    let (o00, _) = m.line(0.0, 0.0);
-    let (o10, d) = m.line(1.0, 0.0);
-    let (o01, _) = m.line(0.0, 1.0);
-    let eu = sub(o10, o00);
-    let ev = sub(o01, o00);
-    let q = sub(p, o00);
-    let q = sub(q, scale(d, dot(q, d)));
-    [dot(q, eu) / dot(eu, eu), dot(q, ev) / dot(ev, ev)]
 }
 
 /// The surface point of texel (x, y).

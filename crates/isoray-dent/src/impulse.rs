@@ -13,9 +13,7 @@
 /// A vector of three components.
 pub type V3 = [f64; 3];
 
-fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
+use crate::vec::dot;
 
 /// The yield impulse Y = ε/(1 − ε) of restitution ε (clamped to [0, 1]):
 /// 0 at ε = 0 (every impact dents), infinite at ε = 1 (none does).

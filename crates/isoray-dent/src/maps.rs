@@ -5,7 +5,9 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::field::{Field, March};
 use crate::heightmap::{HeightMap, MapError};
+use crate::imprint::{imprint_ortho, imprint_texel, Imprint, ImprintMethod, OrthoOptions, Sphere};
 use crate::impulse::V3;
 use crate::normalmap::{sobel_normal, NormalMap, NormalMapOptions, Wrap};
 use crate::uv::UvMapping;
@@ -46,6 +48,45 @@ impl DentMaps {
             height,
             normals,
             options,
+        }
+    }
+
+    /// Imprints impactor `b` (at its pushed pose, within `reach`) into
+    /// the struck body `a`'s height map by `method`, all in `a`'s own
+    /// coordinates; the ortho methods' camera sits on `contact` looking
+    /// along −`n_c` (from `a` towards `b`) with pixels of side `pixel`.
+    /// The normals are not updated ([`DentMaps::update_normals`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn imprint(
+        &mut self,
+        method: ImprintMethod,
+        a: &dyn Field,
+        b: &dyn Field,
+        contact: V3,
+        n_c: V3,
+        reach: Sphere,
+        pixel: f64,
+    ) -> Imprint {
+        let m = March::default();
+        match method {
+            ImprintMethod::Texel => imprint_texel(&mut self.height, &self.mapping, a, b, reach, m),
+            ImprintMethod::Ortho | ImprintMethod::OrthoProjected => {
+                let opts = OrthoOptions {
+                    project_on_normal: method == ImprintMethod::OrthoProjected,
+                };
+                imprint_ortho(
+                    &mut self.height,
+                    &self.mapping,
+                    a,
+                    b,
+                    contact,
+                    n_c,
+                    reach,
+                    pixel,
+                    opts,
+                    m,
+                )
+            }
         }
     }
 

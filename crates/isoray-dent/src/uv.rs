@@ -145,10 +145,8 @@ impl UvMapping {
     /// The (u, v) of a surface point p (None outside a planar rectangle).
     pub fn uv(&self, p: V3) -> Option<[f64; 2]> {
         match *self {
-            UvMapping::Planar { axis, min, max, .. } => {
-                let ((a, sa), (b, sb)) = picture(axis);
-                let u = (sa * p[a] - min[0]) / (max[0] - min[0]);
-                let v = (sb * p[b] - min[1]) / (max[1] - min[1]);
+            UvMapping::Planar { .. } => {
+                let [u, v] = self.planar_uv(p)?;
                 ((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v)).then_some([u, v])
             }
             UvMapping::Spherical { .. } => {
@@ -161,6 +159,19 @@ impl UvMapping {
                 Some([u.rem_euclid(1.0), v])
             }
         }
+    }
+
+    /// A planar mapping's (u, v) of any point p, outside [0, 1] beyond its
+    /// rectangle; None for other mappings.
+    pub fn planar_uv(&self, p: V3) -> Option<[f64; 2]> {
+        let UvMapping::Planar { axis, min, max, .. } = *self else {
+            return None;
+        };
+        let ((a, sa), (b, sb)) = picture(axis);
+        Some([
+            (sa * p[a] - min[0]) / (max[0] - min[0]),
+            (sb * p[b] - min[1]) / (max[1] - min[1]),
+        ])
     }
 
     /// The tangent frame (T along +u, B towards row 0) at surface point p

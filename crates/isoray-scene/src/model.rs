@@ -1333,15 +1333,7 @@ impl Scene {
                 "`object.{i}`: a placement needs finite numbers and a positive scale, found {v:?}"
             )));
         }
-        let values = [
-            v.position[0],
-            v.position[1],
-            v.position[2],
-            v.rotation[0],
-            v.rotation[1],
-            v.rotation[2],
-            v.scale,
-        ];
+        let values = v.values();
         let mut next = self.inputs.clone();
         let mut changed = Vec::new();
         for (k, x) in values.into_iter().enumerate() {

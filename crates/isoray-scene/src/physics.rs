@@ -183,6 +183,17 @@ pub struct ObjectPhysics {
     pub maps: Option<Arc<isoray_dent::DentMaps>>,
 }
 
+impl ObjectPhysics {
+    /// The object's dent maps as they are now: a copy of its maps, or
+    /// untouched ones of its `dent_map` settings.
+    pub fn current_maps(&self) -> std::result::Result<isoray_dent::DentMaps, String> {
+        match &self.maps {
+            Some(m) => Ok(m.as_ref().clone()),
+            None => self.dent_map.blank(),
+        }
+    }
+}
+
 const BODIES: &[(&str, BodyKind)] = &[
     ("none", BodyKind::None),
     ("fixed", BodyKind::Fixed),
@@ -327,6 +338,22 @@ fn rot(axis: usize, deg: f64, v: [f64; 3]) -> [f64; 3] {
 }
 
 impl Placement {
+    /// The seven values of the object's placement inputs: position x, y,
+    /// z, rotation x, y, z (degrees), scale.
+    pub fn values(&self) -> [f64; 7] {
+        let (p, r) = (self.position, self.rotation);
+        [p[0], p[1], p[2], r[0], r[1], r[2], self.scale]
+    }
+
+    /// The placement of seven input values ([`Placement::values`]).
+    pub fn from_values(v: &[f64]) -> Placement {
+        Placement {
+            position: [v[0], v[1], v[2]],
+            rotation: [v[3], v[4], v[5]],
+            scale: v[6],
+        }
+    }
+
     /// R·v: a direction of the object in the world.
     pub fn dir_to_world(&self, v: [f64; 3]) -> [f64; 3] {
         rot(
@@ -365,12 +392,7 @@ impl crate::Scene {
         let Some(t) = &self.objects[i].transform else {
             return Placement::default();
         };
-        let v = |k: usize| self.inputs[t.inputs as usize + k];
-        Placement {
-            position: [v(0), v(1), v(2)],
-            rotation: [v(3), v(4), v(5)],
-            scale: v(6),
-        }
+        Placement::from_values(&self.inputs[t.inputs as usize..t.inputs as usize + 7])
     }
 
     /// The normal at world point `p` of object `object` whose undented

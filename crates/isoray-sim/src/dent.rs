@@ -6,24 +6,11 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use isoray_dent::field::March;
-use isoray_dent::imprint::{imprint_ortho, imprint_texel, reach_of, OrthoOptions, Sphere};
+use isoray_dent::imprint::{reach_of, ImprintMethod, Sphere};
 use isoray_dent::Rect;
 use isoray_scene::{DentMode, Scene};
 
 use crate::Impact;
-
-/// How the depth is measured (`--imprint`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum ImprintMethod {
-    /// Along the struck surface's normal, texel by texel (isoray's).
-    #[default]
-    Texel,
-    /// The thesis's orthographic depth passes along the impact.
-    Ortho,
-    /// Those, scaled by N·N_C.
-    OrthoProjected,
-}
 
 /// What an impact did to one of its objects.
 #[derive(Debug, Clone, PartialEq)]
@@ -87,13 +74,7 @@ pub fn dent_impact(scene: &mut Scene, impact: &Impact, method: ImprintMethod) ->
             out.push(record);
             continue;
         }
-        let Ok(mut maps) = o
-            .physics
-            .maps
-            .as_deref()
-            .cloned()
-            .map_or_else(|| o.physics.dent_map.blank(), Ok)
-        else {
+        let Ok(mut maps) = o.physics.current_maps() else {
             out.push(record);
             continue;
         };
@@ -116,30 +97,17 @@ pub fn dent_impact(scene: &mut Scene, impact: &Impact, method: ImprintMethod) ->
             centre: place.to_local(reach_world.centre),
             radius: reach_world.radius / s,
         };
-        let mapping = maps.mapping.clone();
+        let pixel = o.physics.dent_map.extent / maps.height.width() as f64;
         let started = Instant::now();
-        let imprint = match method {
-            ImprintMethod::Texel => {
-                imprint_texel(&mut maps.height, &mapping, &a_local, &b_local, reach, March::default())
-            }
-            ImprintMethod::Ortho | ImprintMethod::OrthoProjected => {
-                let pixel = o.physics.dent_map.extent / maps.height.width() as f64;
-                imprint_ortho(
-                    &mut maps.height,
-                    &mapping,
-                    &a_local,
-                    &b_local,
-                    place.to_local(impact.point),
-                    place.dir_to_local(n),
-                    reach,
-                    pixel,
-                    OrthoOptions {
-                        project_on_normal: method == ImprintMethod::OrthoProjected,
-                    },
-                    March::default(),
-                )
-            }
-        };
+        let imprint = maps.imprint(
+            method,
+            &a_local,
+            &b_local,
+            place.to_local(impact.point),
+            place.dir_to_local(n),
+            reach,
+            pixel,
+        );
         record.imprint_ms = started.elapsed().as_secs_f64() * 1e3;
         let started = Instant::now();
         maps.update_normals();

@@ -23,7 +23,8 @@ use rapier3d::prelude::*;
 
 mod dent;
 pub mod run;
-pub use dent::{dent_impact, DentRecord, ImprintMethod};
+pub use dent::{dent_impact, DentRecord};
+pub use isoray_dent::imprint::ImprintMethod;
 
 /// Errors building a simulation.
 #[derive(Debug, thiserror::Error)]
@@ -80,6 +81,8 @@ struct Body {
 pub struct Simulation {
     world: PhysicsWorld,
     bodies: Vec<Body>,
+    /// Each collider's index in `bodies`.
+    by_collider: std::collections::HashMap<ColliderHandle, usize>,
     /// Pairs of objects in contact after the last step.
     touching: BTreeSet<(usize, usize)>,
     time: f64,
@@ -168,9 +171,11 @@ impl Simulation {
                 scale: place.scale,
             });
         }
+        let by_collider = bodies.iter().enumerate().map(|(k, b)| (b.collider, k)).collect();
         Ok(Simulation {
             world,
             bodies,
+            by_collider,
             touching: BTreeSet::new(),
             time: 0.0,
             steps: 0,
@@ -218,7 +223,7 @@ impl Simulation {
         self.world.step();
         self.steps += 1;
         self.time = self.steps as f64 * self.timestep();
-        let index_of = |h: ColliderHandle| self.bodies.iter().position(|b| b.collider == h);
+        let index_of = |h: ColliderHandle| self.by_collider.get(&h).copied();
         let mut now = BTreeSet::new();
         let mut impacts = Vec::new();
         for pair in self.world.narrow_phase.contact_pairs() {

@@ -87,26 +87,6 @@ pub struct Record {
     pub frames: Vec<Vec<(usize, [f64; 7])>>,
 }
 
-fn seven(p: &Placement) -> [f64; 7] {
-    [
-        p.position[0],
-        p.position[1],
-        p.position[2],
-        p.rotation[0],
-        p.rotation[1],
-        p.rotation[2],
-        p.scale,
-    ]
-}
-
-fn placement(v: &[f64; 7]) -> Placement {
-    Placement {
-        position: [v[0], v[1], v[2]],
-        rotation: [v[3], v[4], v[5]],
-        scale: v[6],
-    }
-}
-
 impl Record {
     /// Writes the record as JSON, atomically.
     pub fn write(&self, path: &Path) -> Result<(), String> {
@@ -165,11 +145,8 @@ pub fn run<E: From<SimError> + From<isoray_scene::SceneError>>(
             let impacts = sim.step();
             sim.place(scene)?;
             for i in impacts {
-                let dents = if opts.dents == Some(DentMode::None) {
-                    Vec::new()
-                } else {
-                    dent_impact(scene, &i, opts.imprint)
-                };
+                // `--dents none` left no object dentable: nothing is dented.
+                let dents = dent_impact(scene, &i, opts.imprint);
                 record.impacts.push(entry(scene, &i, &dents));
             }
         }
@@ -177,7 +154,7 @@ pub fn run<E: From<SimError> + From<isoray_scene::SceneError>>(
         sim.place(scene)?;
         record
             .frames
-            .push(sim.placements().iter().map(|(i, p)| (*i, seven(p))).collect());
+            .push(sim.placements().iter().map(|(i, p)| (*i, p.values())).collect());
         frame(n, scene)?;
     }
     Ok(record)
@@ -196,7 +173,7 @@ fn entry(scene: &Scene, i: &Impact, dents: &[crate::DentRecord]) -> ImpactRecord
         velocities: i.velocities,
         impulse: i.impulse,
         approaching: i.approaching,
-        placements: [seven(&scene.placement(i.a)), seven(&scene.placement(i.b))],
+        placements: [scene.placement(i.a).values(), scene.placement(i.b).values()],
         dents: dents
             .iter()
             .map(|d| DentEntry {
@@ -238,7 +215,7 @@ pub fn replay<E: From<SimError> + From<isoray_scene::SceneError>>(
                     .into());
                 }
                 if scene.objects[o].transform.is_some() {
-                    scene.set_placement(o, placement(&r.placements[k]))?;
+                    scene.set_placement(o, Placement::from_values(&r.placements[k]))?;
                 }
             }
             let impact = Impact {
@@ -254,12 +231,10 @@ pub fn replay<E: From<SimError> + From<isoray_scene::SceneError>>(
                 impulse: r.impulse,
                 approaching: r.approaching,
             };
-            if opts.dents != Some(DentMode::None) {
-                dent_impact(scene, &impact, opts.imprint);
-            }
+            dent_impact(scene, &impact, opts.imprint);
         }
         for (o, v) in placed {
-            scene.set_placement(*o, placement(v))?;
+            scene.set_placement(*o, Placement::from_values(v))?;
         }
         frame(n as u64, scene)?;
     }

@@ -146,8 +146,7 @@ fn vec3_arg(v: &[f64], flag: &str) -> Result<[f64; 3], Failure> {
 /// Runs `isoray dent`: one impact on a dentable object, its maps read from
 /// and written back to the `--maps` folder.
 pub(crate) fn cmd_dent(a: &DentArgs) -> Result<(), Failure> {
-    use isoray_dent::field::March;
-    use isoray_dent::imprint::{imprint_ortho, imprint_texel, OrthoOptions, Sphere};
+    use isoray_dent::imprint::{ImprintMethod, Sphere};
     let Some(dir) = a.scene.maps() else {
         return Err(usage(
             "isoray dent needs --maps DIR: the folder its maps are read from and written to".into(),
@@ -205,10 +204,7 @@ pub(crate) fn cmd_dent(a: &DentArgs) -> Result<(), Failure> {
     };
     let mut maps = obj
         .physics
-        .maps
-        .as_deref()
-        .cloned()
-        .map_or_else(|| obj.physics.dent_map.blank(), Ok)
+        .current_maps()
         .map_err(|e| usage(format!("`object.{i}.dent_map`: {e}")))?;
     let place = scene.placement(i);
     let s = place.scale;
@@ -263,33 +259,24 @@ pub(crate) fn cmd_dent(a: &DentArgs) -> Result<(), Failure> {
         centre: place.to_local(reach_world.centre),
         radius: reach_world.radius / s,
     };
-    let started = std::time::Instant::now();
-    let out = match a.imprint {
-        "texel" => imprint_texel(&mut maps.height, &maps.mapping.clone(), &a_local, &b_local, reach, March::default()),
-        "ortho" | "ortho-projected" => {
-            let e = obj.physics.dent_map.extent;
-            let pixel = 2.0 * e / maps.height.width() as f64 / 2.0;
-            imprint_ortho(
-                &mut maps.height,
-                &maps.mapping.clone(),
-                &a_local,
-                &b_local,
-                place.to_local(at),
-                place.dir_to_local(n),
-                reach,
-                pixel,
-                OrthoOptions {
-                    project_on_normal: a.imprint == "ortho-projected",
-                },
-                March::default(),
-            )
-        }
-        other => {
-            return Err(usage(format!(
-                "--imprint {other}: expected texel (along the surface normal), ortho (the thesis's) or ortho-projected (the thesis's with its N·N_C fix)"
-            )))
-        }
+    let Some(method) = ImprintMethod::from_name(a.imprint) else {
+        return Err(usage(format!(
+            "--imprint {}: expected {}",
+            a.imprint,
+            ImprintMethod::NAMES
+        )));
     };
+    let pixel = obj.physics.dent_map.extent / maps.height.width() as f64;
+    let started = std::time::Instant::now();
+    let out = maps.imprint(
+        method,
+        &a_local,
+        &b_local,
+        place.to_local(at),
+        place.dir_to_local(n),
+        reach,
+        pixel,
+    );
     let imprint_ms = started.elapsed().as_secs_f64() * 1e3;
     let started = std::time::Instant::now();
     let normals = maps.update_normals();

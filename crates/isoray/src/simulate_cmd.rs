@@ -55,15 +55,12 @@ pub(crate) fn cmd_simulate(a: &SimulateArgs) -> Result<(), Failure> {
         }
         Some(other) => return Err(usage(format!("--dents {other}: expected none, bump, sdf or auto"))),
     };
-    let imprint = match a.imprint {
-        "texel" => ImprintMethod::Texel,
-        "ortho" => ImprintMethod::Ortho,
-        "ortho-projected" => ImprintMethod::OrthoProjected,
-        other => {
-            return Err(usage(format!(
-                "--imprint {other}: expected texel, ortho or ortho-projected"
-            )))
-        }
+    let Some(imprint) = ImprintMethod::from_name(a.imprint) else {
+        return Err(usage(format!(
+            "--imprint {}: expected {}",
+            a.imprint,
+            ImprintMethod::NAMES
+        )));
     };
     let how = HowToRender {
         threads: a.threads,
