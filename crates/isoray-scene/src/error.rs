@@ -43,7 +43,7 @@ impl SceneError {
 }
 
 /// The texts errors can point into.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Sources {
     /// The scene file's name as given.
     pub path: String,

@@ -38,6 +38,7 @@ mod read;
 mod reader;
 mod save;
 pub mod schema;
+mod sdf_dents;
 pub mod skeleton;
 
 pub use animation::{animation_keys, track_keys, Animation, Interpolation, Track};
@@ -48,3 +49,4 @@ pub use load::{load, load_str, load_str_with, load_with, LoadOptions};
 pub use model::*;
 pub use physics::{physics_keys, BodyKind, Collider, DentMapSettings, DentMode, ObjectPhysics, Physics, Placement};
 pub use save::{edit_text, replace_atomically, set_file, write_atomic, SetReport};
+pub use sdf_dents::{append_to_text as append_sdf_dents_to_text, sdf_dent_keys, SdfDent};

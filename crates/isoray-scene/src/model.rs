@@ -807,6 +807,7 @@ pub fn key_tables() -> Vec<(&'static str, &'static [KeySpec])> {
         ("### `[[bone]]`", crate::skeleton::bone_keys()),
         ("### `[skeleton]`", crate::skeleton::skeleton_keys()),
         ("### `[physics]`", crate::physics::physics_keys()),
+        ("### `[[object.sdf_dent]]`", crate::sdf_dents::sdf_dent_keys()),
     ]
 }
 
@@ -1625,7 +1626,13 @@ impl Scene {
     /// parameter values and time: objects whose bound inputs did not change
     /// come from the object cache, analyses from the analysis cache.
     fn recompile(&mut self) -> Result<(), crate::SceneError> {
-        let mut src = self.origin.sources.clone();
+        let sources = self.origin.sources.clone();
+        self.recompile_from(sources)
+    }
+
+    /// [`Scene::recompile`] from `sources` (which the scene then keeps).
+    pub(crate) fn recompile_from(&mut self, sources: crate::error::Sources) -> Result<(), crate::SceneError> {
+        let mut src = sources.clone();
         for (name, v) in &self.params {
             src.overrides.push(format!("params.{name}={}", v.toml_text()));
         }
@@ -1637,7 +1644,14 @@ impl Scene {
             progress: self.library.progress().cloned(),
         };
         let fresh = crate::load_str_with(&src.text, &src.path, &src.overrides, &opts)?;
-        let origin = self.origin.clone();
+        let origin = if sources == self.origin.sources {
+            self.origin.clone()
+        } else {
+            std::sync::Arc::new(SceneOrigin {
+                sources,
+                root: fresh.origin.root.clone(),
+            })
+        };
         *self = fresh;
         self.origin = origin;
         Ok(())

@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 use crate::error::{SceneError, Sources};
 use crate::reader::Reader;
-use crate::schema::{key, num, KeySpec, Kind, Range};
+use crate::schema::{key, key_without_default, num, KeySpec, Kind, Range};
 
 type Result<T> = std::result::Result<T, SceneError>;
 use crate::doc::Located;
@@ -181,6 +181,8 @@ pub struct ObjectPhysics {
     pub dent_map: DentMapSettings,
     /// The object's current dent maps (None: untouched, or not dentable).
     pub maps: Option<Arc<isoray_dent::DentMaps>>,
+    /// Dents cut into its geometry (`[[object.sdf_dent]]`), in order.
+    pub sdf_dents: Vec<crate::sdf_dents::SdfDent>,
 }
 
 impl ObjectPhysics {
@@ -243,6 +245,12 @@ pub(crate) fn object_physics_keys() -> Vec<KeySpec> {
             Kind::Choice(names(DENTS)),
             "\"none\"",
             "what impacts do to it: `\"bump\"` dents in its height map, shaded by normal mapping; `\"sdf\"` dents as geometry; `\"auto\"` the map while shallow, geometry when deep",
+        ),
+        key_without_default(
+            "sdf_dent",
+            Kind::Text("array of tables"),
+            "none",
+            "dents cut into its geometry, one `[[object.sdf_dent]]` table each (see below); `isoray simulate --save-scene` writes them",
         ),
         key(
             "dent_map",

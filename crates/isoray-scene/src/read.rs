@@ -509,7 +509,8 @@ impl<'a> Build<'a> {
                             }
                         },
                     };
-                    let physics = crate::physics::read_object_physics(src, &mut r, &format!("object.{i}"))?;
+                    let mut physics = crate::physics::read_object_physics(src, &mut r, &format!("object.{i}"))?;
+                    let sdf_dents = crate::sdf_dents::read(src, &mut r, &format!("object.{i}"))?;
                     r.finish_keys(object_keys())?;
                     // Placed in the file, by a track or by the simulation
                     // (which need the inputs).
@@ -558,7 +559,36 @@ impl<'a> Build<'a> {
                             c
                         }
                     };
-                    let key = crate::compile::object_key(lib, text, transform.is_some(), &called);
+                    // The impactors' shape texts of the object's SDF dents,
+                    // parsed once per distinct text.
+                    let mut called = called;
+                    let mut dent_programs: Vec<(String, isoray_shape::syntax::Program, isoray_shape::SourceId)> =
+                        Vec::new();
+                    let mut dent_program_of = Vec::with_capacity(sdf_dents.len());
+                    for (dent, loc) in &sdf_dents {
+                        let k = match dent_programs.iter().position(|(t, _, _)| *t == dent.shape) {
+                            Some(k) => k,
+                            None => {
+                                let Item::Str(_, map) = &loc.item else { unreachable!() };
+                                let did = snippets.len();
+                                snippets.push((loc, map));
+                                let p = isoray_shape::syntax::parse(&dent.shape, did)
+                                    .map_err(|d| shape_error(snippets, d))?;
+                                for c in p.functions_called() {
+                                    if !called.contains(&c) {
+                                        called.push(c);
+                                    }
+                                }
+                                dent_programs.push((dent.shape.clone(), p, did));
+                                dent_programs.len() - 1
+                            }
+                        };
+                        dent_program_of.push(k);
+                    }
+                    physics.sdf_dents = sdf_dents.into_iter().map(|(d, _)| d).collect();
+                    let mut key = crate::compile::object_key(lib, text, transform.is_some(), &called);
+                    key.push_str(&crate::sdf_dents::cache_key(&physics.sdf_dents));
+                    let dents = &physics.sdf_dents;
                     let fragment = cache
                         .get_or_compile(key, &inputs, || {
                             let program = match program.take() {
@@ -570,12 +600,25 @@ impl<'a> Build<'a> {
                                 Some(tr) => tr.lower_point_at(&mut b, crate::compile::FRAGMENT_INPUTS),
                                 None => [b.x(), b.y(), b.z()],
                             };
-                            let compiled = lib.compile_at(&mut b, &program, id, p)?;
+                            let mut compiled = lib.compile_at(&mut b, &program, id, p)?;
+                            let mut bound = std::mem::take(&mut compiled.bound);
+                            let mut guards = std::mem::take(&mut compiled.guards);
+                            let dented = crate::sdf_dents::lower(&mut b, p, compiled.node, dents, &mut |b, k, q| {
+                                let (_, program, did) = &dent_programs[dent_program_of[k]];
+                                let c = lib.compile_at(b, program, *did, q)?;
+                                bound.extend(c.bound);
+                                guards.extend(c.guards);
+                                Ok::<_, Diagnostic>(c.node)
+                            })?;
+                            bound.sort_unstable();
+                            bound.dedup();
+                            compiled.bound = bound;
+                            compiled.guards = guards;
                             let node = match &transform {
                                 Some(_) => {
-                                    Transform::lower_distance_at(&mut b, compiled.node, crate::compile::FRAGMENT_INPUTS)
+                                    Transform::lower_distance_at(&mut b, dented, crate::compile::FRAGMENT_INPUTS)
                                 }
-                                None => compiled.node,
+                                None => dented,
                             };
                             let guards = compiled
                                 .guards

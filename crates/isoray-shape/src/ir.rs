@@ -724,15 +724,94 @@ impl Builder {
     }
 }
 
-/// Where `Tape::extract` places a node relative to the lazy selects.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Region {
-    /// Always computed.
-    Eager,
-    /// Only in the region of the lazy select at this node.
-    Lazy(u32),
-    /// Reached by two regions: made eager.
-    Shared,
+/// One step of a tape's emission order.
+#[derive(Debug, Clone, Copy)]
+enum Emit {
+    /// The skip that opens the region of the lazy select at this node.
+    Skip(usize),
+    /// The node's instruction, if it has one.
+    Node(usize),
+}
+
+/// The operands of an operation.
+fn operands_of(op: &Op) -> Vec<Node> {
+    match *op {
+        Op::Unary(_, a) => vec![a],
+        Op::Binary(_, a, b) => vec![a, b],
+        Op::Select(c, a, b) => vec![c, a, b],
+        _ => Vec::new(),
+    }
+}
+
+/// Appends to `order` the nodes of `scope` (sorted node indices) that `top`
+/// needs, operands first. A lazy select that the scope always computes
+/// opens a region, behind a skip, of the nodes only its `b` operand needs;
+/// the region is emitted the same way, so a lazy select inside it opens a
+/// region of its own (a tree of bounding volumes skips whole subtrees). A
+/// node two regions need is computed outside both, with what it uses.
+fn emit_scope(ops: &[Op], is_lazy: &dyn Fn(usize) -> bool, scope: &[usize], top: usize, order: &mut Vec<Emit>) {
+    const OUTSIDE: usize = usize::MAX;
+    const SHARED: usize = usize::MAX - 1;
+    let pos = |m: Node| scope.binary_search(&(m.0 as usize)).ok();
+    let k = scope.len();
+    // Nodes the scope computes always: reached from `top` without going
+    // through the `b` of a lazy select.
+    let mut eager = vec![false; k];
+    if let Ok(t) = scope.binary_search(&top) {
+        eager[t] = true;
+    }
+    for j in (0..k).rev() {
+        if !eager[j] {
+            continue;
+        }
+        let i = scope[j];
+        for (slot, m) in operands_of(&ops[i]).into_iter().enumerate() {
+            if is_lazy(i) && slot == 2 {
+                continue;
+            }
+            if let Some(q) = pos(m) {
+                eager[q] = true;
+            }
+        }
+    }
+    // Each always-computed lazy select's region: what its `b` reaches that
+    // is not computed always. A node reached from two regions is shared.
+    let roots: Vec<usize> = (0..k).filter(|&j| eager[j] && is_lazy(scope[j])).collect();
+    let mut region = vec![OUTSIDE; k];
+    for &rj in &roots {
+        let Op::Select(_, _, b) = ops[scope[rj]] else { continue };
+        let mut stack = vec![b];
+        let mut seen = std::collections::HashSet::new();
+        while let Some(m) = stack.pop() {
+            let Some(q) = pos(m) else { continue };
+            if eager[q] || !seen.insert(q) {
+                continue;
+            }
+            region[q] = if region[q] == OUTSIDE { rj } else { SHARED };
+            stack.extend(operands_of(&ops[scope[q]]));
+        }
+    }
+    // A shared node is computed always; everything below it that is not
+    // was reached from both regions too, so it is shared as well.
+    let mut members: HashMap<usize, Vec<usize>> = HashMap::new();
+    for j in 0..k {
+        match region[j] {
+            OUTSIDE => {}
+            SHARED => eager[j] = true,
+            r => members.entry(r).or_default().push(scope[j]),
+        }
+    }
+    for j in 0..k {
+        if !eager[j] {
+            continue;
+        }
+        let i = scope[j];
+        if let (Some(inner), Op::Select(_, _, b)) = (members.get(&j), ops[i]) {
+            order.push(Emit::Skip(i));
+            emit_scope(ops, is_lazy, inner, b.0 as usize, order);
+        }
+        order.push(Emit::Node(i));
+    }
 }
 
 /// A tape instruction: an operation writing `out` from slots.
@@ -930,91 +1009,26 @@ impl Tape {
                 _ => operands(i).iter().all(|m| uniform[m.0 as usize]),
             };
         }
-        // Which nodes the output needs, and which it needs without going
-        // through the `b` of a lazy select ("eager": always computed).
+        // Which nodes the output needs.
         let mut needed = vec![false; n];
-        let mut eager = vec![false; n];
         needed[output.0 as usize] = true;
-        eager[output.0 as usize] = true;
         for i in (0..n).rev() {
-            if !needed[i] {
-                continue;
-            }
-            let ops_i = operands(i);
-            let is_lazy = lazy.contains(&Node(i as u32));
-            for (k, m) in ops_i.iter().enumerate() {
-                needed[m.0 as usize] = true;
-                if eager[i] && !(is_lazy && k == 2) {
-                    eager[m.0 as usize] = true;
+            if needed[i] {
+                for m in operands(i) {
+                    needed[m.0 as usize] = true;
                 }
             }
         }
-        // The region of an eager lazy select: the non-eager nodes its `b`
-        // reaches. A node in two regions is placed in neither (made eager).
-        let mut region_of = vec![Region::Eager; n];
-        let mut is_root = vec![false; n];
-        for i in 0..n {
-            is_root[i] = needed[i] && eager[i] && !uniform[i] && lazy.contains(&Node(i as u32));
-        }
-        for r in (0..n).filter(|&i| is_root[i]) {
-            let Op::Select(_, _, b) = ops[r] else { continue };
-            let mut stack = vec![b.0 as usize];
-            let mut seen = std::collections::HashSet::new();
-            while let Some(m) = stack.pop() {
-                if eager[m] || !seen.insert(m) {
-                    continue;
-                }
-                region_of[m] = match region_of[m] {
-                    Region::Eager => Region::Lazy(r as u32),
-                    _ => Region::Shared,
-                };
-                stack.extend(operands(m).iter().map(|x| x.0 as usize));
-            }
-        }
-        // Nodes shared by two regions become eager, with everything they use.
-        for i in (0..n).rev() {
-            if region_of[i] == Region::Shared {
-                eager[i] = true;
-            }
-            if eager[i] && needed[i] {
-                region_of[i] = Region::Eager;
-                let is_lazy = lazy.contains(&Node(i as u32));
-                for (k, m) in operands(i).into_iter().enumerate() {
-                    if is_lazy && k == 2 {
-                        continue;
-                    }
-                    if !eager[m.0 as usize] {
-                        eager[m.0 as usize] = true;
-                        region_of[m.0 as usize] = Region::Eager;
-                    }
-                }
-            }
-        }
-        // Emission order: eager nodes by index; before each region root, its region.
-        let mut order: Vec<usize> = Vec::new();
-        let mut skip_before: Vec<(usize, usize)> = Vec::new(); // (position of the skip, region root)
-        let members: Vec<Vec<usize>> = {
-            let mut m = vec![Vec::new(); n];
-            for i in 0..n {
-                if let (true, false, false, Region::Lazy(r)) = (needed[i], eager[i], uniform[i], region_of[i]) {
-                    m[r as usize].push(i);
-                }
-            }
-            m
-        };
-        for i in 0..n {
-            if !needed[i] || !eager[i] {
-                continue;
-            }
-            if is_root[i] && !members[i].is_empty() {
-                skip_before.push((order.len(), i));
-                order.extend(&members[i]);
-            }
-            order.push(i);
-        }
+        // The emission order, with lazy regions nested to any depth: a
+        // region's own lazy selects get regions inside it (see `emit_scope`).
+        let is_lazy = |i: usize| lazy.contains(&Node(i as u32));
+        let scope: Vec<usize> = (0..n).filter(|&i| needed[i] && !uniform[i]).collect();
+        let mut order: Vec<Emit> = Vec::new();
+        emit_scope(ops, &is_lazy, &scope, output.0 as usize, &mut order);
         // Liveness over the emission order.
         let mut last_use = vec![0usize; n];
-        for (pos, &i) in order.iter().enumerate() {
+        for (pos, e) in order.iter().enumerate() {
+            let Emit::Node(i) = *e else { continue };
             for m in operands(i) {
                 last_use[m.0 as usize] = pos;
             }
@@ -1116,20 +1130,20 @@ impl Tape {
 
         let mut free: Vec<u32> = Vec::new();
         let mut instrs = Vec::new();
-        let mut skips = skip_before.iter().peekable();
         let mut pending: Vec<(usize, usize)> = Vec::new(); // (instr index of a skip, region root)
-        for (pos, &i) in order.iter().enumerate() {
-            if let Some(&&(at, root)) = skips.peek() {
-                if at == pos {
-                    skips.next();
+        for (pos, e) in order.iter().enumerate() {
+            let i = match *e {
+                Emit::Skip(root) => {
                     let Op::Select(c, _, _) = ops[root] else { unreachable!() };
                     pending.push((instrs.len(), root));
                     instrs.push(Instr::Skip {
                         c: slot_of[c.0 as usize],
                         len: 0,
                     });
+                    continue;
                 }
-            }
+                Emit::Node(i) => i,
+            };
             if !is_temp(i) {
                 continue;
             }
@@ -1370,6 +1384,108 @@ mod tests {
                 assert_eq!(out[k], want, "batch {p:?}");
             }
         }
+    }
+
+    /// A tree of bounding spheres: the union of eight small spheres in two
+    /// groups of four, each sphere and each group behind a lazy select, so
+    /// the tape nests skips; and its eager twin.
+    fn nested_pair() -> (Tape, Tape) {
+        let build = |lazy: bool| {
+            let mut b = Builder::new();
+            let (x, y, z) = (b.x(), b.y(), b.z());
+            let ball = |b: &mut Builder, c: [f64; 3], r: f64| {
+                let dx = b.add_c(x, -c[0]);
+                let dy = b.add_c(y, -c[1]);
+                let dz = b.add_c(z, -c[2]);
+                let (dx, dy, dz) = (b.square(dx), b.square(dy), b.square(dz));
+                let s = b.add(dx, dy);
+                let s = b.add(s, dz);
+                let s = b.sqrt(s);
+                b.add_c(s, -r)
+            };
+            let pick = |b: &mut Builder, far: Node, near: Node, e: Node| {
+                if lazy {
+                    b.lazy_select(far, near, e)
+                } else {
+                    b.select(far, near, e)
+                }
+            };
+            let mut groups = Vec::new();
+            for g in 0..2 {
+                let gc = [4.0 * g as f64 - 2.0, 0.0, 0.0];
+                let bound = ball(&mut b, gc, 1.6);
+                let mut u = b.constant(f64::INFINITY);
+                for k in 0..4 {
+                    let a = k as f64 * std::f64::consts::FRAC_PI_2;
+                    let c = [gc[0] + a.cos(), a.sin(), 0.0];
+                    let d = ball(&mut b, c, 0.3);
+                    // Something expensive per sphere, skipped when far.
+                    let w = b.unary(UnOp::Sin, d);
+                    let w = b.mul_c(w, 1e-3);
+                    let d = b.add(d, w);
+                    let own = ball(&mut b, c, 0.4);
+                    let far = b.add_c(own, -0.1);
+                    let one = pick(&mut b, far, own, d);
+                    u = b.min(u, one);
+                }
+                let far = b.add_c(bound, -0.2);
+                groups.push(pick(&mut b, far, bound, u));
+            }
+            let out = b.min(groups[0], groups[1]);
+            b.tape(out)
+        };
+        (build(true), build(false))
+    }
+
+    #[test]
+    fn lazy_selects_inside_a_region_nest_their_skips() {
+        let (lazy, eager) = nested_pair();
+        let ins = lazy.instrs();
+        // A skip inside another skip's range.
+        let skips: Vec<(usize, usize)> = ins
+            .iter()
+            .enumerate()
+            .filter_map(|(k, i)| match i {
+                Instr::Skip { len, .. } => Some((k, k + *len as usize)),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(skips.len(), 10, "two groups and eight spheres: {skips:?}");
+        let nested = skips
+            .iter()
+            .filter(|&&(a, e)| skips.iter().any(|&(a2, e2)| a2 < a && e <= e2))
+            .count();
+        assert_eq!(nested, 8, "every sphere's skip sits inside its group's");
+        let mut pl = crate::eval::PointEvaluator::<f64>::new(&lazy);
+        let mut pe = crate::eval::PointEvaluator::<f64>::new(&eager);
+        let mut bl = crate::eval::BatchEvaluator::<f64>::new(&lazy);
+        for scale in [0.5, 1.5, 2.5, 6.0] {
+            let pts: Vec<[f64; 3]> = (0..200)
+                .map(|i| {
+                    let a = i as f64 * 0.37;
+                    [
+                        a.cos() * scale - 2.0 + 0.02 * i as f64,
+                        (1.3 * a).sin() * scale,
+                        0.1 * a.sin(),
+                    ]
+                })
+                .collect();
+            let col = |j: usize| pts.iter().map(|p| p[j]).collect::<Vec<f64>>();
+            let mut out = vec![0.0; pts.len()];
+            bl.eval(&[], &col(0), &col(1), &col(2), &mut out);
+            for (k, p) in pts.iter().enumerate() {
+                let want = pe.eval(&[], p[0], p[1], p[2]);
+                assert_eq!(pl.eval(&[], p[0], p[1], p[2]), want, "point {p:?}");
+                assert_eq!(out[k], want, "batch {p:?}");
+            }
+        }
+        // Far from both groups, a point runs neither group's region.
+        let inside: usize = skips
+            .iter()
+            .filter(|&&(a, _)| !skips.iter().any(|&(a2, e2)| a2 < a && a <= e2))
+            .map(|&(a, e)| e - a)
+            .sum();
+        assert!(inside * 2 > ins.len(), "most of the tape sits in the two group regions");
     }
 
     #[test]
