@@ -165,6 +165,64 @@ pub fn reach_of(b: &dyn Field, start: V3, cap: f64, margin: f64) -> Sphere {
     }
 }
 
+/// A bounding sphere of the overlap of `a` and `b` (where both are
+/// negative) at a contact, for a dent cut into geometry: `b` overlaps `a`
+/// by `depth` below `contact` along −`n` (`n` points from `a` towards
+/// `b`). The overlap is probed from the points of that line inside both
+/// (2 %, 25 %, 50 %, 75 % and 98 % of the depth down, and −50 %, 150 %,
+/// −200 % and 300 % for a contact point off the surfaces), each along 82 directions (16
+/// across `n` at each of the elevations 0°, ±30° and ±60°, and ±`n`), to
+/// its exit (capped at `cap`); the sphere is centred half way down and
+/// reaches the farthest exit, grown by a quarter (for what falls between
+/// the directions) and `margin`. A shallow cap is widest at the top, which
+/// the first point sees. None when no probe point is inside both.
+pub fn overlap_bound(
+    a: &dyn Field,
+    b: &dyn Field,
+    contact: V3,
+    n: V3,
+    depth: f64,
+    cap: f64,
+    margin: f64,
+) -> Option<Sphere> {
+    let both = |p: V3| a.distance(p).max(b.distance(p));
+    let n = normalize(n);
+    let helper = if n[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let t = normalize(cross(n, helper));
+    let u = cross(n, t);
+    let mut dirs = vec![n, scale(n, -1.0)];
+    for e in [-60.0f64, -30.0, 0.0, 30.0, 60.0] {
+        let (se, ce) = e.to_radians().sin_cos();
+        for k in 0..16 {
+            let (sa, ca) = (k as f64 * std::f64::consts::PI / 8.0).sin_cos();
+            dirs.push(std::array::from_fn(|i| ce * (ca * t[i] + sa * u[i]) + se * n[i]));
+        }
+    }
+    let centre = along(contact, n, -0.5 * depth);
+    let mut r: Option<f64> = None;
+    // Points above and below the expected overlap too: a contact point
+    // off the surfaces by more than the depth still finds it.
+    for f in [0.02, 0.25, 0.5, 0.75, 0.98, -0.5, 1.5, -2.0, 3.0] {
+        let start = along(contact, n, -f * depth);
+        if both(start) >= 0.0 {
+            continue;
+        }
+        for &d in &dirs {
+            let e = along(start, d, exit(&both, start, d, cap, March::default()));
+            let reach = length(sub(e, centre));
+            r = Some(r.map_or(reach, |r: f64| r.max(reach)));
+        }
+    }
+    r.map(|r| Sphere {
+        centre,
+        radius: 1.25 * r + margin,
+    })
+}
+
 /// The side of the smallest blocks of texels the texel imprint skips at once.
 const BLOCK: u32 = 8;
 

@@ -130,3 +130,32 @@ fn kat_13_the_ortho_method_errs_by_the_tilt_and_the_fix_brings_the_depth_back() 
         assert!(errors(&map).0 < 1e-5);
     }
 }
+
+/// The overlap bound of a dent cut into geometry holds the whole spherical
+/// cap (its rim at ρ = sqrt(2rd − d²)), tightly, whatever the impact's tilt.
+#[test]
+fn the_overlap_bound_holds_the_cap_at_any_tilt() {
+    use isoray_dent::imprint::overlap_bound;
+    let rho = (2.0 * R * D - D * D).sqrt();
+    for tilt in [0.0f64, 20.0, 45.0, 70.0] {
+        // The plane and the ball turned together about z: the cap turns too.
+        let (s, c) = tilt.to_radians().sin_cos();
+        let back = |p: [f64; 3]| [c * p[0] + s * p[1], -s * p[0] + c * p[1], p[2]];
+        let a = move |p: [f64; 3]| plane(back(p));
+        let b = move |p: [f64; 3]| ball(back(p));
+        let n = [-s, c, 0.0];
+        let bound = overlap_bound(&a, &b, [0.0; 3], n, D, 4.0, 0.0).expect("the line is inside both");
+        let centre = [0.5 * D * s, -0.5 * D * c, 0.0];
+        assert!((0..3).all(|i| (bound.centre[i] - centre[i]).abs() < 1e-12));
+        // Every point of the cap (its rim and its bottom) is inside.
+        let far = (rho * rho + 0.25 * D * D).sqrt();
+        assert!(bound.radius >= far, "tilt {tilt}: {} < {far}", bound.radius);
+        assert!(
+            bound.radius <= 1.25 * far + 1e-6,
+            "tilt {tilt}: {} too loose",
+            bound.radius
+        );
+    }
+    // A start outside the overlap gives no bound.
+    assert!(overlap_bound(&plane, &ball, [0.0, 0.5, 0.0], [0.0, 1.0, 0.0], D, 4.0, 0.0).is_none());
+}

@@ -178,7 +178,8 @@ pub struct RenderedImage {
     pub color: Vec<[f32; 3]>,
     /// Distance t along the primary ray through the pixel centre; +inf on a miss.
     pub depth: Option<Vec<f32>>,
-    /// World-space unit normal at the pixel-centre hit; 0 on a miss.
+    /// World-space unit shading normal at the pixel-centre hit (normal
+    /// mapped on dented objects); 0 on a miss.
     pub normals: Option<Vec<[f32; 3]>>,
     /// The diffuse colour of the material at the pixel-centre hit; 0 on a miss.
     pub albedo: Option<Vec<[f32; 3]>>,
@@ -773,14 +774,16 @@ impl<'s> Worker<'s> {
                     self.rays.push(origin, d.as_vec3().to_array());
                 }
             }
-            let (hs, e) = self.trace_and_normals(ctx, false);
+            let (mut hs, e) = self.trace_and_normals(ctx, false);
             evals += e;
             depth = self.hits.iter().map(|h| h.t).collect();
+            let (surfaces, objects) = self.materials(ctx, &hs, &mut evals, false);
+            // The shading normal: dented objects' tilted by their normal maps.
+            crate::dents::perturb(ctx.scene, &mut hs, &objects);
             normals = vec![[0.0; 3]; self.rays.len()];
             for (k, &i) in hs.idx.iter().enumerate() {
                 normals[i] = [hs.nx[k], hs.ny[k], hs.nz[k]];
             }
-            let (surfaces, _) = self.materials(ctx, &hs, &mut evals, false);
             albedo = vec![[0.0; 3]; self.rays.len()];
             for (k, &i) in hs.idx.iter().enumerate() {
                 albedo[i] = surfaces[k].diffuse.to_array();

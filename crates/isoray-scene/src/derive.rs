@@ -130,7 +130,7 @@ pub(crate) fn assemble(
     };
     // Planes and spheres are intersected in closed form; the rest is marched.
     let analytic: Vec<Option<Analytic>> = if analytic_allowed(render) {
-        objects.iter().map(|o| Analytic::recognise(&o.shape, inputs)).collect()
+        objects.iter().map(|o| o.closed_form(inputs)).collect()
     } else {
         vec![None; objects.len()]
     };

@@ -838,6 +838,19 @@ pub struct Object {
     pub(crate) fragment: std::sync::Arc<crate::compile::Fragment>,
 }
 
+impl Object {
+    /// The plane or sphere the object's distance is, at the inputs
+    /// `inputs`, for intersecting it in closed form; None for any other
+    /// shape, and for an object with dents cut into it (a dented sphere
+    /// matches its sphere almost everywhere, but rays must see the dents).
+    pub fn closed_form(&self, inputs: &[f64]) -> Option<crate::analytic::Analytic> {
+        if !self.physics.sdf_dents.is_empty() {
+            return None;
+        }
+        crate::analytic::Analytic::recognise(&self.shape, inputs)
+    }
+}
+
 /// An object's placement: its shape d₀ is rotated about x, then y, then z
 /// (world axes, degrees), scaled uniformly by s and moved to `position`:
 /// d(p) = s·d₀(R⁻¹(p − c)/s), so distances stay exact.
@@ -1602,7 +1615,7 @@ impl Scene {
             if !o.shape.tape().vars().iter().any(|v| vars.contains(v)) {
                 continue;
             }
-            let now = crate::analytic::Analytic::recognise(&o.shape, &self.inputs);
+            let now = o.closed_form(&self.inputs);
             // A change of which objects are closed forms changes what is
             // marched: derive again from the compiled objects.
             if now.is_some() != self.derived.analytic[i].is_some() {

@@ -183,6 +183,8 @@ pub struct ObjectPhysics {
     pub maps: Option<Arc<isoray_dent::DentMaps>>,
     /// Dents cut into its geometry (`[[object.sdf_dent]]`), in order.
     pub sdf_dents: Vec<crate::sdf_dents::SdfDent>,
+    /// `dent_rim`: the soft rim of the dents impacts cut into its geometry.
+    pub dent_rim: f64,
 }
 
 impl ObjectPhysics {
@@ -246,6 +248,12 @@ pub(crate) fn object_physics_keys() -> Vec<KeySpec> {
             "\"none\"",
             "what impacts do to it: `\"bump\"` dents in its height map, shaded by normal mapping; `\"sdf\"` dents as geometry; `\"auto\"` the map while shallow, geometry when deep",
         ),
+        key(
+            "dent_rim",
+            num(Range::NON_NEGATIVE),
+            "0.0",
+            "the soft rim of the dents impacts cut into its geometry (`dents = \"sdf\"` or `\"auto\"`): their edges are rounded over this width, in its own units",
+        ),
         key_without_default(
             "sdf_dent",
             Kind::Text("array of tables"),
@@ -269,6 +277,7 @@ pub(crate) fn read_object_physics(src: &Sources, r: &mut Reader, ctx: &str) -> R
         velocity: r.vec3("velocity", [0.0; 3])?,
         angular_velocity: r.vec3("angular_velocity", [0.0; 3])?,
         dents: r.choice("dents", DENTS, DentMode::None)?,
+        dent_rim: r.num_in("dent_rim", 0.0, |x| x >= 0.0 && x.is_finite(), "a number ≥ 0")?,
         ..Default::default()
     };
     if let Some(v) = r.get("dent_map") {
@@ -391,6 +400,36 @@ impl Placement {
         let d: [f64; 3] = std::array::from_fn(|i| (p[i] - self.position[i]) / self.scale);
         self.dir_to_local(d)
     }
+
+    /// This placement seen from `frame`'s own coordinates: the placement
+    /// P with frame.to_world(P.to_world(q)) = self.to_world(q).
+    pub fn relative_to(&self, frame: &Placement) -> Placement {
+        // Columns of the rotation: frame⁻¹ · self applied to the axes.
+        let cols: [[f64; 3]; 3] = std::array::from_fn(|k| {
+            let mut e = [0.0; 3];
+            e[k] = 1.0;
+            frame.dir_to_local(self.dir_to_world(e))
+        });
+        let m = |r: usize, c: usize| cols[c][r];
+        Placement {
+            position: frame.to_local(self.position),
+            rotation: euler_xyz(m),
+            scale: self.scale / frame.scale,
+        }
+    }
+}
+
+/// The angles (degrees) about x, then y, then z (world axes) of the
+/// rotation matrix `m(row, column)` = R_z·R_y·R_x.
+fn euler_xyz(m: impl Fn(usize, usize) -> f64) -> [f64; 3] {
+    let sy = (-m(2, 0)).clamp(-1.0, 1.0);
+    let y = sy.asin();
+    if sy.abs() < 1.0 - 1e-12 {
+        [m(2, 1).atan2(m(2, 2)), y, m(1, 0).atan2(m(0, 0))].map(f64::to_degrees)
+    } else {
+        // Gimbal lock: only x − z (or x + z) is defined; take z = 0.
+        [(-m(1, 2)).atan2(m(1, 1)), y, 0.0].map(f64::to_degrees)
+    }
 }
 
 impl crate::Scene {
@@ -469,6 +508,35 @@ impl crate::Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_relative_placement_composes_back() {
+        let a = Placement {
+            position: [1.0, -2.0, 0.5],
+            rotation: [20.0, 35.0, -70.0],
+            scale: 1.5,
+        };
+        let b = Placement {
+            position: [0.3, 0.2, -1.0],
+            rotation: [-40.0, 10.0, 100.0],
+            scale: 0.25,
+        };
+        // The last pair is in gimbal lock (y = 90° relative to the identity).
+        let gimbal = Placement {
+            position: [0.5, 0.0, 0.0],
+            rotation: [30.0, 90.0, 10.0],
+            scale: 2.0,
+        };
+        for (a, b) in [(a, b), (b, a), (Placement::default(), gimbal)] {
+            let rel = b.relative_to(&a);
+            for q in [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.3, -0.7, 2.0]] {
+                let (x, y) = (a.to_world(rel.to_world(q)), b.to_world(q));
+                for i in 0..3 {
+                    assert!((x[i] - y[i]).abs() < 1e-9, "{b:?}: {x:?} vs {y:?}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn placements_invert_and_turn_about_x_then_y_then_z() {

@@ -391,7 +391,7 @@ impl crate::Scene {
     /// scene's text as `[[object.sdf_dent]]` tables ([`Scene::source_text`])
     /// and the scene is compiled again, the other objects coming from the
     /// object cache. The time, parameters, placements (those the
-    /// simulation set too) and dent maps stay as they were. On an error
+    /// simulation set too), dent maps and dent modes stay as they were. On an error
     /// the scene is unchanged.
     ///
     /// [`Scene::source_text`]: crate::Scene::source_text
@@ -405,7 +405,12 @@ impl crate::Scene {
             .filter(|&i| self.objects[i].transform.is_some())
             .map(|i| (i, self.placement(i)))
             .collect();
-        let maps: Vec<_> = self.objects.iter().map(|o| o.physics.maps.clone()).collect();
+        // What runs change in memory: the maps, and `dents` (`--dents`).
+        let kept: Vec<_> = self
+            .objects
+            .iter()
+            .map(|o| (o.physics.maps.clone(), o.physics.dents))
+            .collect();
         let mut fresh = self.clone();
         fresh.recompile_from(sources)?;
         for (i, p) in placements {
@@ -413,8 +418,9 @@ impl crate::Scene {
                 fresh.set_placement(i, p)?;
             }
         }
-        for (o, m) in fresh.objects.iter_mut().zip(maps) {
-            o.physics.maps = m;
+        for (o, (maps, dents)) in fresh.objects.iter_mut().zip(kept) {
+            o.physics.maps = maps;
+            o.physics.dents = dents;
         }
         *self = fresh;
         Ok(())

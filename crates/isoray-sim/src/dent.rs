@@ -1,14 +1,18 @@
-//! An impact's dents: for each dentable object of the pair (`dents =
-//! "bump"` or `"auto"`), the thesis's model decides the depth
-//! (t·κ·max(0, |j| − ε/(1 − ε)) with the struck object's material), and the
-//! other object, pushed that deep into it, is imprinted into its height map.
+//! An impact's dents: for each dentable object of the pair, the thesis's
+//! model decides the depth (t·κ·max(0, |j| − ε/(1 − ε)) with the struck
+//! object's material), and the other object, pushed that deep into it, is
+//! imprinted into its height map (`dents = "bump"`) or cut out of its
+//! geometry (`"sdf"`). `"auto"` cuts a dent that is deep (a quarter of the
+//! map's `range` or more: half of what the map can hold) or that would
+//! saturate the map (the ortho imprints measure deeper than the depth at
+//! steep tilts), and imprints the others.
 
 use std::sync::Arc;
 use std::time::Instant;
 
-use isoray_dent::imprint::{reach_of, ImprintMethod, Sphere};
+use isoray_dent::imprint::{overlap_bound, reach_of, ImprintMethod, Sphere};
 use isoray_dent::Rect;
-use isoray_scene::{DentMode, Scene};
+use isoray_scene::{DentMode, Scene, SceneError, SdfDent};
 
 use crate::Impact;
 
@@ -33,18 +37,23 @@ pub struct DentRecord {
     pub imprint_ms: f64,
     /// The normal map's update, ms.
     pub normals_ms: f64,
+    /// Whether the dent was cut into the geometry (an `[[object.sdf_dent]]`)
+    /// rather than imprinted in the maps; `imprint_ms` is then the cut's
+    /// time (the scene compiled again).
+    pub geometry: bool,
 }
 
 /// Dents the dentable objects of `impact` in `scene` (their maps created
 /// when they have none), the impactor at its pose in `scene` pushed so
 /// that it overlaps the struck object by the dent's depth. Returns one
 /// record per dentable object of the pair (depth 0 below the yield or for
-/// a separating contact).
-pub fn dent_impact(scene: &mut Scene, impact: &Impact, method: ImprintMethod) -> Vec<DentRecord> {
+/// a separating contact). An error only when a cut dent does not compile.
+pub fn dent_impact(scene: &mut Scene, impact: &Impact, method: ImprintMethod) -> Result<Vec<DentRecord>, SceneError> {
     let mut out = Vec::new();
     for (struck, other, sign) in [(impact.a, impact.b, 1.0), (impact.b, impact.a, -1.0)] {
         let o = &scene.objects[struck];
-        if !matches!(o.physics.dents, DentMode::Bump | DentMode::Auto) {
+        let mode = o.physics.dents;
+        if mode == DentMode::None {
             continue;
         }
         let material = &scene.materials[o.material];
@@ -69,8 +78,18 @@ pub fn dent_impact(scene: &mut Scene, impact: &Impact, method: ImprintMethod) ->
             saturated: 0,
             imprint_ms: 0.0,
             normals_ms: 0.0,
+            geometry: false,
         };
         if depth <= 0.0 {
+            out.push(record);
+            continue;
+        }
+        // The normal from the struck object towards the impactor.
+        let n = impact.normal.map(|c| c * sign);
+        let shift = depth - impact.penetration;
+        let deep = depth >= 0.25 * o.physics.dent_map.range;
+        if mode == DentMode::Sdf || (mode == DentMode::Auto && deep) {
+            cut(scene, impact, struck, other, n, shift, &mut record)?;
             out.push(record);
             continue;
         }
@@ -78,9 +97,7 @@ pub fn dent_impact(scene: &mut Scene, impact: &Impact, method: ImprintMethod) ->
             out.push(record);
             continue;
         };
-        // The normal from the struck object towards the impactor.
-        let n = impact.normal.map(|c| c * sign);
-        let shift = depth - impact.penetration;
+        let saturated_before = maps.height.saturated();
         let place = scene.placement(struck);
         let s = place.scale;
         let inputs = &scene.inputs;
@@ -112,11 +129,69 @@ pub fn dent_impact(scene: &mut Scene, impact: &Impact, method: ImprintMethod) ->
         let started = Instant::now();
         maps.update_normals();
         record.normals_ms = started.elapsed().as_secs_f64() * 1e3;
+        if mode == DentMode::Auto && maps.height.saturated() > saturated_before {
+            // The map cannot hold this dent: cut it instead (the maps stay as they were).
+            record.normals_ms = 0.0;
+            cut(scene, impact, struck, other, n, shift, &mut record)?;
+            out.push(record);
+            continue;
+        }
         record.texels = imprint.lowered;
         record.rect = imprint.rect;
         record.saturated = maps.height.saturated();
         scene.objects[struck].physics.maps = Some(Arc::new(maps));
         out.push(record);
     }
-    out
+    Ok(out)
+}
+
+/// Cuts the impactor `other`, pushed `shift` along −`n` from its pose in
+/// `scene`, out of `struck`'s geometry: an `[[object.sdf_dent]]` in the
+/// struck object's own coordinates, bounded by the overlap of the two.
+fn cut(
+    scene: &mut Scene,
+    impact: &Impact,
+    struck: usize,
+    other: usize,
+    n: [f64; 3],
+    shift: f64,
+    record: &mut DentRecord,
+) -> Result<(), SceneError> {
+    let started = Instant::now();
+    let place = scene.placement(struck);
+    let mut pushed = scene.placement(other);
+    for (k, c) in pushed.position.iter_mut().enumerate() {
+        *c -= n[k] * shift;
+    }
+    let inputs = &scene.inputs;
+    let a_shape = &scene.objects[struck].shape;
+    let b_shape = &scene.objects[other].shape;
+    let a_world = |p: [f64; 3]| a_shape.eval_with(inputs, p);
+    let b_world =
+        |p: [f64; 3]| b_shape.eval_with(inputs, [p[0] + n[0] * shift, p[1] + n[1] * shift, p[2] + n[2] * shift]);
+    let s = place.scale;
+    let o = &scene.objects[struck];
+    let rim = o.physics.dent_rim;
+    let cap = 4.0 * o.physics.dent_map.extent * s;
+    let depth = record.depth;
+    let bound = overlap_bound(&a_world, &b_world, impact.point, n, depth, cap, rim * s + 1e-9).unwrap_or_else(|| {
+        // No overlap where expected: bound the impactor near the contact.
+        let start: [f64; 3] = std::array::from_fn(|k| impact.point[k] - n[k] * 0.5 * depth);
+        let r = reach_of(&b_world, start, cap, depth);
+        Sphere {
+            centre: r.centre,
+            radius: r.radius + rim * s,
+        }
+    });
+    let c = place.to_local(bound.centre);
+    let dent = SdfDent {
+        shape: scene.objects[other].source.clone(),
+        placement: pushed.relative_to(&place),
+        rim,
+        bound: [c[0], c[1], c[2], bound.radius / s],
+    };
+    scene.add_sdf_dents(struck, &[dent])?;
+    record.geometry = true;
+    record.imprint_ms = started.elapsed().as_secs_f64() * 1e3;
+    Ok(())
 }

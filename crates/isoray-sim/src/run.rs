@@ -72,6 +72,9 @@ pub struct DentEntry {
     pub imprint_ms: f64,
     /// Normal-map update time, ms.
     pub normals_ms: f64,
+    /// Cut into the geometry (`[[object.sdf_dent]]`) rather than imprinted in the maps.
+    #[serde(default)]
+    pub geometry: bool,
 }
 
 /// A run's record: `isoray simulate --record`.
@@ -146,7 +149,7 @@ pub fn run<E: From<SimError> + From<isoray_scene::SceneError>>(
             sim.place(scene)?;
             for i in impacts {
                 // `--dents none` left no object dentable: nothing is dented.
-                let dents = dent_impact(scene, &i, opts.imprint);
+                let dents = dent_impact(scene, &i, opts.imprint)?;
                 record.impacts.push(entry(scene, &i, &dents));
             }
         }
@@ -184,6 +187,7 @@ fn entry(scene: &Scene, i: &Impact, dents: &[crate::DentRecord]) -> ImpactRecord
                 rect: d.rect.map(|r| [r.x0, r.y0, r.x1, r.y1]),
                 imprint_ms: d.imprint_ms,
                 normals_ms: d.normals_ms,
+                geometry: d.geometry,
             })
             .collect(),
     }
@@ -231,7 +235,7 @@ pub fn replay<E: From<SimError> + From<isoray_scene::SceneError>>(
                 impulse: r.impulse,
                 approaching: r.approaching,
             };
-            dent_impact(scene, &impact, opts.imprint);
+            dent_impact(scene, &impact, opts.imprint)?;
         }
         for (o, v) in placed {
             scene.set_placement(*o, Placement::from_values(v))?;

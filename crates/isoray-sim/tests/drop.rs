@@ -82,7 +82,7 @@ fn a_drop_dents_the_plane_only_above_the_threshold() {
     // KAT 3: the threshold is 0.5 m/s, a drop of 12.7 mm.
     let mut low = scene(0.008);
     let i = first_impact(&mut low, 2.0).unwrap();
-    let rec = dent_impact(&mut low, &i, ImprintMethod::Texel);
+    let rec = dent_impact(&mut low, &i, ImprintMethod::Texel).unwrap();
     assert_eq!(rec.len(), 1);
     assert_eq!((rec[0].depth, rec[0].texels), (0.0, 0));
     assert!(
@@ -92,7 +92,7 @@ fn a_drop_dents_the_plane_only_above_the_threshold() {
     // KAT 4: above it, the centre of the dent is t·κ·(|j| − Y) deep.
     let mut high = scene(0.2);
     let i = first_impact(&mut high, 2.0).unwrap();
-    let rec = dent_impact(&mut high, &i, ImprintMethod::Texel);
+    let rec = dent_impact(&mut high, &i, ImprintMethod::Texel).unwrap();
     let want = 0.1 * 0.01 * (i.impulse - 1.0);
     assert!(
         (rec[0].depth - want).abs() < 1e-12 && want > 0.002,
@@ -194,4 +194,54 @@ fn a_recorded_run_replays_to_the_same_dents_and_frames() {
     std::fs::write(&path, "{\"timestep\": 0.1, \"fps\": }").unwrap();
     let e = Record::read(&path).unwrap_err();
     assert!(e.contains(":1:") && e.contains("isoray simulate --record"), "{e}");
+}
+
+/// `dents = "sdf"`: the same drop cuts the ball out of the plane's
+/// geometry; the crater's bottom is t·κ·(|j| − Y) below the plane, under
+/// the contact, and the scene's text reloads to the same dented plane.
+#[test]
+fn a_drop_cuts_a_crater_as_deep_as_the_model_says() {
+    let mut s = scene(0.2);
+    s.objects[0].physics.dents = isoray_scene::DentMode::Sdf;
+    let i = first_impact(&mut s, 2.0).unwrap();
+    let rec = dent_impact(&mut s, &i, ImprintMethod::Texel).unwrap();
+    let want = 0.1 * 0.01 * (i.impulse - 1.0);
+    assert!(rec[0].geometry && (rec[0].depth - want).abs() < 1e-12);
+    assert!(s.objects[0].physics.maps.is_none(), "no map: the dent is geometry");
+    let dents = &s.objects[0].physics.sdf_dents;
+    assert_eq!(dents.len(), 1);
+    let plane = |sc: &isoray_scene::Scene, p: [f64; 3]| sc.objects[0].shape.eval_with(&sc.inputs, p);
+    let (x, z) = (i.point[0], i.point[2]);
+    // 1 mm above the crater's bottom, the plane's distance is 1 mm.
+    for h in [0.001, 0.0005] {
+        let d = plane(&s, [x, -want + h, z]);
+        assert!((d - h).abs() < 1e-6, "{d} vs {h}");
+    }
+    // The crater's rim: at ρ = sqrt(2rd − d²) from the contact the surface is back at y = 0.
+    let rho = (2.0 * 0.1 * want - want * want).sqrt();
+    assert!(plane(&s, [x + 1.05 * rho, -1e-4, z]) < 0.0);
+    assert!(plane(&s, [x + 0.95 * rho, -1e-4, z]) > 0.0);
+    // The bound holds the cap and is not much larger.
+    let r = dents[0].bound[3];
+    assert!(r > rho && r < 2.0 * rho, "bound {r} for a cap of radius {rho}");
+    // Saved and reloaded, the plane is the same.
+    let again = isoray_scene::load_str(s.source_text(), "drop.toml", &[]).unwrap();
+    for p in [[x, -want + 0.001, z], [x + 0.5 * rho, 0.0, z], [0.3, 0.1, 0.2]] {
+        assert_eq!(plane(&again, p), plane(&s, p));
+    }
+    // `auto` imprints this shallow dent into the map (it is under a quarter
+    // of the map's range 0.02)...
+    let mut s = scene(0.2);
+    s.objects[0].physics.dents = isoray_scene::DentMode::Auto;
+    let i = first_impact(&mut s, 2.0).unwrap();
+    assert!(want < 0.25 * 0.02);
+    let rec = dent_impact(&mut s, &i, ImprintMethod::Texel).unwrap();
+    assert!(!rec[0].geometry && rec[0].texels > 0);
+    // ... and cuts one that is deeper (a map of range 0.008 takes dents to 2 mm).
+    let mut s = scene(0.2);
+    s.objects[0].physics.dents = isoray_scene::DentMode::Auto;
+    s.objects[0].physics.dent_map.range = 0.008;
+    let i = first_impact(&mut s, 2.0).unwrap();
+    let rec = dent_impact(&mut s, &i, ImprintMethod::Texel).unwrap();
+    assert!(rec[0].geometry && s.objects[0].physics.sdf_dents.len() == 1);
 }

@@ -189,6 +189,11 @@ enum Command {
         /// Replay a record instead of simulating: the same dents and frames.
         #[arg(long, value_name = "impacts.json")]
         replay: Option<PathBuf>,
+        /// Write the scene with the dents cut into geometry (`--dents sdf`
+        /// or `auto`) as [[object.sdf_dent]] tables: load it to render,
+        /// mesh or simulate on from the dented objects.
+        #[arg(long, value_name = "SCENE.toml")]
+        save_scene: Option<PathBuf>,
         /// Worker threads of the CPU renderer (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
@@ -612,6 +617,7 @@ fn main() -> ExitCode {
             imprint,
             record,
             replay,
+            save_scene,
             threads,
             quiet,
         } => simulate_cmd::cmd_simulate(&simulate_cmd::SimulateArgs {
@@ -624,6 +630,7 @@ fn main() -> ExitCode {
             imprint: &imprint,
             record: record.as_deref(),
             replay: replay.as_deref(),
+            save_scene: save_scene.as_deref(),
             threads,
             quiet,
         }),

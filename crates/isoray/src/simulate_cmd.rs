@@ -32,6 +32,7 @@ pub(crate) struct SimulateArgs<'a> {
     pub imprint: &'a str,
     pub record: Option<&'a Path>,
     pub replay: Option<&'a Path>,
+    pub save_scene: Option<&'a Path>,
     pub threads: Option<usize>,
     pub quiet: bool,
 }
@@ -48,11 +49,7 @@ pub(crate) fn cmd_simulate(a: &SimulateArgs) -> Result<(), Failure> {
         Some("none") => Some(DentMode::None),
         Some("bump") => Some(DentMode::Bump),
         Some("auto") => Some(DentMode::Auto),
-        Some("sdf") => {
-            return Err(usage(
-                "--dents sdf (dents as geometry) is not built yet: use bump (maps and normal mapping)".into(),
-            ))
-        }
+        Some("sdf") => Some(DentMode::Sdf),
         Some(other) => return Err(usage(format!("--dents {other}: expected none, bump, sdf or auto"))),
     };
     let Some(imprint) = ImprintMethod::from_name(a.imprint) else {
@@ -168,11 +165,20 @@ pub(crate) fn cmd_simulate(a: &SimulateArgs) -> Result<(), Failure> {
         r.write(path).map_err(io_failure)?;
         written.push(path.to_path_buf());
     }
+    if let Some(path) = a.save_scene {
+        isoray_scene::write_atomic(path, scene.source_text().as_bytes())
+            .map_err(|e| io_failure(format!("{}: {e}", path.display())))?;
+        written.push(path.to_path_buf());
+    }
     if !a.quiet {
         let secs = start.elapsed().as_secs_f64().max(1e-9);
         let impacts = replayed.as_ref().or(record.as_ref()).map_or(0, |r| r.impacts.len());
         let dented: usize = record.as_ref().map_or(0, |r| {
-            r.impacts.iter().flat_map(|i| &i.dents).filter(|d| d.texels > 0).count()
+            r.impacts
+                .iter()
+                .flat_map(|i| &i.dents)
+                .filter(|d| d.texels > 0 || d.geometry)
+                .count()
         });
         eprintln!(
             "{} {count} frames ({duration} s at {fps} fps) in {secs:.2} s ({:.2} frames/s, {render_secs:.2} s rendering): {impacts} impacts{} -> {} … {}",

@@ -322,3 +322,73 @@ fn a_drop_dents_the_plane_and_a_replay_gives_the_same_bytes() {
     assert!(frames == again, "replayed frames differ");
     assert!(height == height2, "replayed maps differ");
 }
+
+/// `--dents sdf`: the impacts are cut into the plane's geometry, the scene
+/// saved with them (`--save-scene`) reloads, and `isoray mesh` of it has
+/// the craters: the mesh of a slab of the plane around the first dent
+/// lacks exactly the spherical caps' volume π d² (3r − d) / 3.
+#[test]
+#[cfg(feature = "physics")]
+fn sdf_dents_are_saved_and_meshed() {
+    let saved = tmp("dented.toml");
+    let record = tmp("sdf.json");
+    let o = isoray(&[
+        "simulate",
+        &example(),
+        "-o",
+        tmp("sdf_%04d.png").to_str().unwrap(),
+        "--set",
+        "render.width=48",
+        "--set",
+        "render.height=27",
+        "--fps",
+        "10",
+        "--dents",
+        "sdf",
+        "--save-scene",
+        saved.to_str().unwrap(),
+        "--record",
+        record.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&record).unwrap();
+    assert!(text.contains("\"geometry\": true"), "{text}");
+    let scene = isoray_scene::load(&saved, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let dents = &scene.objects[0].physics.sdf_dents;
+    assert!(!dents.is_empty());
+    // A slab of the plane 0.1 deep around the first dent.
+    let c0 = dents[0].placement.position;
+    let (lo, hi) = ([c0[0] - 0.15, -0.1, c0[2] - 0.15], [c0[0] + 0.15, 0.05, c0[2] + 0.15]);
+    let mut caps = 0.0;
+    for d in dents {
+        let (c, r) = (d.placement.position, 0.15);
+        let depth = r - c[1];
+        let rho = (2.0 * r * depth - depth * depth).sqrt();
+        if c[0] - rho > lo[0] && c[0] + rho < hi[0] && c[2] - rho > lo[2] && c[2] + rho < hi[2] {
+            caps += std::f64::consts::PI * depth * depth * (3.0 * r - depth) / 3.0;
+        } else {
+            assert!(c[0] - rho > hi[0] || c[0] + rho < lo[0], "a cap cut by the box");
+        }
+    }
+    let out = tmp("dented.stl");
+    let bounds = format!("{},{},{},{},{},{}", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    let o = isoray(&[
+        "mesh",
+        saved.to_str().unwrap(),
+        "plane",
+        "-o",
+        out.to_str().unwrap(),
+        "--bounds",
+        &bounds,
+        "--resolution",
+        "150",
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m = isoray_mesh::io::read(&out).unwrap();
+    let slab = 0.3 * 0.3 * 0.1;
+    let missing = slab - m.volume();
+    assert!(caps > 1e-4, "{caps}");
+    assert!((missing - caps).abs() < 0.05 * caps, "missing {missing} vs caps {caps}");
+}
