@@ -26,7 +26,7 @@ pub enum GpuError {
 }
 
 /// Storage buffers the tracer binds in one shader.
-const STORAGE_BUFFERS: u32 = 11;
+const STORAGE_BUFFERS: u32 = 12;
 
 /// A GPU device and its queue, with the adapter's description.
 pub struct Gpu {

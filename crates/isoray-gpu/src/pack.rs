@@ -2,8 +2,14 @@
 //! (the only part that depends on the shapes' structure) and the buffers
 //! of everything else, laid out as `render.wgsl` declares them.
 
+use std::sync::Arc;
+
+use isoray_dent::normalmap::sobel_normal;
+use isoray_dent::uv::UvMapping;
+use isoray_dent::{DentMaps, Wrap};
 use isoray_scene::analytic::Analytic;
 use isoray_scene::env::{EnvMap, RgbImage};
+use isoray_scene::DentMode;
 use isoray_scene::{
     AaPattern, AoTarget, AoWeights, LightKind, March, NormalMethod, Projection, Scene, ShadowMode, ShadowTarget,
     StepLimit, View,
@@ -180,9 +186,16 @@ impl SceneCode {
     }
 
     /// The `Obj` array: material, closed form and program of each object.
-    pub(crate) fn objects(&self, scene: &Scene) -> Words {
+    /// `dents[i]`: object i's header in the dent buffer ([`dents`]), or `NO_DENT`.
+    pub(crate) fn objects(&self, scene: &Scene, dents: &[u32]) -> Words {
         let mut out = Words::default();
-        for ((o, a), c) in scene.objects.iter().zip(&scene.derived().analytic).zip(&self.objects) {
+        for (((o, a), c), &dent) in scene
+            .objects
+            .iter()
+            .zip(&scene.derived().analytic)
+            .zip(&self.objects)
+            .zip(dents)
+        {
             let (kind, v) = match a {
                 None => (0, [0.0f32; 4]),
                 Some(Analytic::Plane { n, h }) => (1, [n[0] as f32, n[1] as f32, n[2] as f32, *h as f32]),
@@ -190,7 +203,7 @@ impl SceneCode {
             };
             let (start, len, slot) = c.program;
             out.u(o.material as u32).u(kind).u(start).u(len);
-            out.u(slot).u(0).u(0).u(0);
+            out.u(slot).u(dent).u(0).u(0);
             for x in v {
                 out.f(x);
             }
@@ -557,4 +570,87 @@ pub(crate) fn meshes(scene: &Scene) -> Words {
         out.0[r..r + MESH_RECORD].copy_from_slice(&words);
     }
     out
+}
+
+/// An object without dent maps in the `Obj` array.
+pub(crate) const NO_DENT: u32 = u32::MAX;
+
+/// Words of a dented object's header in the dent buffer: mapping kind
+/// (1 planar, 2 spherical), axis, width, height, whether columns clamp,
+/// the offset of its texels; the planar picture's min u, v and max u, v;
+/// the placement's position and scale, and the columns of its rotation.
+pub(crate) const DENT_HEADER: usize = 28;
+
+/// The texel normals of a dent map, kept across frames while the map is
+/// the same (the scene holds it in an `Arc`).
+#[derive(Debug, Default)]
+pub(crate) struct DentCache(Vec<(Arc<DentMaps>, Arc<Vec<u32>>)>);
+
+/// Each texel's Sobel normal (isoray-dent's, in full precision) as a
+/// `pack2x16snorm` of its x and y; z = sqrt(1 − x² − y²) ≥ 0.
+fn texel_normals(maps: &DentMaps) -> Vec<u32> {
+    let (w, h) = (maps.height.width(), maps.height.height());
+    let snorm = |x: f64| ((x.clamp(-1.0, 1.0) * 32767.0).round() as i16) as u16 as u32;
+    let mut out = Vec::with_capacity((w * h) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            let (n, _) = sobel_normal(maps.height.texels(), w, h, x, y, &maps.options);
+            out.push(snorm(n[0]) | (snorm(n[1]) << 16));
+        }
+    }
+    out
+}
+
+/// The dent buffer: a header per object drawn with dent maps (`dents =
+/// "bump"` or `"auto"` with maps), then their texel normals; and each
+/// object's header offset (or `NO_DENT`). The normals come from `cache`
+/// where the map is unchanged; the cache keeps this frame's maps only.
+pub(crate) fn dents(scene: &Scene, cache: &mut DentCache) -> (Words, Vec<u32>) {
+    let dented: Vec<(usize, &Arc<DentMaps>)> = scene
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| matches!(o.physics.dents, DentMode::Bump | DentMode::Auto))
+        .filter_map(|(i, o)| o.physics.maps.as_ref().map(|m| (i, m)))
+        .collect();
+    let mut offsets = vec![NO_DENT; scene.objects.len()];
+    let mut out = Words::default();
+    let mut next = (dented.len() * DENT_HEADER) as u32;
+    let mut texels: Vec<Arc<Vec<u32>>> = Vec::new();
+    let mut kept = DentCache::default();
+    for (i, maps) in &dented {
+        let words = match cache.0.iter().find(|(m, _)| Arc::ptr_eq(m, maps)) {
+            Some((_, w)) => w.clone(),
+            None => Arc::new(texel_normals(maps)),
+        };
+        kept.0.push(((*maps).clone(), words.clone()));
+        offsets[*i] = out.0.len() as u32;
+        let (kind, axis, min, max) = match maps.mapping {
+            UvMapping::Planar { axis, min, max, .. } => (1, axis as u32, min, max),
+            UvMapping::Spherical { .. } => (2, 0, [0.0; 2], [1.0; 2]),
+        };
+        let clamp_cols = maps.options.wrap == Wrap::Clamp;
+        out.u(kind).u(axis).u(maps.height.width()).u(maps.height.height());
+        out.u(clamp_cols as u32).u(next).u(0).u(0);
+        out.f(min[0] as f32).f(min[1] as f32).f(max[0] as f32).f(max[1] as f32);
+        let place = scene.placement(*i);
+        out.d3(place.position).f(place.scale as f32);
+        for k in 0..3 {
+            let mut e = [0.0; 3];
+            e[k] = 1.0;
+            out.d3(place.dir_to_world(e));
+        }
+        out.u(0).u(0).u(0);
+        debug_assert_eq!(out.0.len() % DENT_HEADER, 0);
+        next += words.len() as u32;
+        texels.push(words);
+    }
+    for t in texels {
+        out.0.extend_from_slice(&t);
+    }
+    if out.0.is_empty() {
+        out.0.push(0);
+    }
+    *cache = kept;
+    (out, offsets)
 }

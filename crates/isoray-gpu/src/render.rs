@@ -22,7 +22,7 @@ use crate::raster::{self, MeshRaster};
 use crate::{Gpu, GpuError};
 
 /// The tracer's bindings.
-const BINDINGS: usize = 12;
+const BINDINGS: usize = 13;
 
 /// Lanes (samples) per dispatch at most (bands of whole rows).
 const BAND_LANES: u64 = 1 << 18;
@@ -115,6 +115,8 @@ pub struct GpuRenderer {
     program: Option<Program>,
     /// The meshes' raster prepass, built at the first scene that has one.
     raster: Option<MeshRaster>,
+    /// The last frame's dent maps' texel normals.
+    dent_cache: pack::DentCache,
 }
 
 impl std::fmt::Debug for GpuRenderer {
@@ -138,6 +140,7 @@ impl GpuRenderer {
             gpu,
             program: None,
             raster: None,
+            dent_cache: Default::default(),
         }
     }
 
@@ -193,9 +196,9 @@ impl GpuRenderer {
         let write = wgpu::BufferBindingType::Storage { read_only: false };
         let uniform = wgpu::BufferBindingType::Uniform;
         // iso_in, settings, lights, materials, objects, environment, out,
-        // stats, programs, scratch, meshes, the meshes' raster ids.
+        // stats, programs, scratch, meshes, the meshes' raster ids, dent maps.
         let bindings = [
-            read, uniform, read, read, read, read, write, write, read, write, read, read,
+            read, uniform, read, read, read, read, write, write, read, write, read, read, read,
         ];
         debug_assert_eq!(bindings.len(), BINDINGS);
         let (pipelines, layout) = self
@@ -297,7 +300,9 @@ impl GpuRenderer {
         let in_buf = storage("iso_in", &inputs);
         let lights = storage("lights", &pack::lights(scene));
         let mats = storage("materials", &pack::materials(scene));
-        let objs = storage("objects", &program.code.objects(scene));
+        let (dent_words, dent_offsets) = pack::dents(scene, &mut self.dent_cache);
+        let objs = storage("objects", &program.code.objects(scene, &dent_offsets));
+        let dent_buf = storage("dents", &dent_words);
         let code_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("programs"),
             contents: &Words::bytes_of(&program.code.code),
@@ -411,6 +416,7 @@ impl GpuRenderer {
                 &scratch_buf,
                 &mesh_buf,
                 &ids_buf,
+                &dent_buf,
             ];
             let bind = self.bind_group(&program.layout, &buffers);
             let query = timestamps.then(|| Queries::new(device));

@@ -48,7 +48,7 @@ struct Mat {
 
 struct Obj {
     material: u32, analytic: u32, code_start: u32, code_len: u32,
-    out_slot: u32, pad0: u32, pad1: u32, pad2: u32,
+    out_slot: u32, dent: u32, pad1: u32, pad2: u32,
     a: vec4<f32>,
 }
 
@@ -74,6 +74,10 @@ var<private> iso_reg_base: u32;
 // the supersampled grid, 0 or (mesh + 1) << 24 | triangle, with
 // `cfg.raster_stride` words a row; a one-word buffer when `cfg.raster` is 0.
 @group(0) @binding(11) var<storage, read> raster_ids: array<u32>;
+// Dent maps (pack::dents): a header of DENT_HEADER words per object drawn
+// with dent maps (Obj.dent), then each map's texel normals, x and y as
+// pack2x16snorm (z ≥ 0 from them).
+@group(0) @binding(12) var<storage, read> dent_data: array<u32>;
 // The prepass's texel (column, row) of the ray `trace` is about to follow
 // (the primary ray of the lane's sample), or NO_TEXEL in x: the trees are walked.
 const NO_TEXEL: u32 = 0xffffffffu;
@@ -410,6 +414,95 @@ fn mesh_normal(h: MeshHit) -> vec3<f32> {
 }
 
 // ---- sphere tracing (isoray-render's sphere_trace_capped) ----
+// ---- Normal mapping of dented objects: isoray-scene's Scene::dent_normal ----
+
+const NO_DENT: u32 = 0xffffffffu;
+
+fn dent_f(i: u32) -> f32 { return bitcast<f32>(dent_data[i]); }
+fn dent_v3(i: u32) -> vec3<f32> { return vec3<f32>(dent_f(i), dent_f(i + 1u), dent_f(i + 2u)); }
+
+// The texel normal at column x, row y of the map whose header is at o.
+fn dent_texel(o: u32, x: u32, y: u32) -> vec3<f32> {
+    let xy = unpack2x16snorm(dent_data[dent_data[o + 5u] + y * dent_data[o + 2u] + x]);
+    return vec3<f32>(xy, sqrt(max(0.0, 1.0 - xy.x * xy.x - xy.y * xy.y)));
+}
+
+// The tangent-space normal at uv, bilinear over the texel normals
+// (isoray-dent's DentMaps::normal_at).
+fn dent_normal_at(o: u32, uv: vec2<f32>) -> vec3<f32> {
+    let w = i32(dent_data[o + 2u]);
+    let h = i32(dent_data[o + 3u]);
+    let fx = uv.x * f32(w) - 0.5;
+    let fy = uv.y * f32(h) - 0.5;
+    let x0 = i32(floor(fx));
+    let y0 = i32(floor(fy));
+    let tx = fx - f32(x0);
+    let ty = fy - f32(y0);
+    var n = vec3<f32>(0.0);
+    for (var k = 0; k < 4; k++) {
+        let dx = k & 1;
+        let dy = k >> 1u;
+        var x = x0 + dx;
+        if (dent_data[o + 4u] != 0u) { x = clamp(x, 0, w - 1); } else { x = ((x % w) + w) % w; }
+        let y = clamp(y0 + dy, 0, h - 1);
+        let wx = select(1.0 - tx, tx, dx == 1);
+        let wy = select(1.0 - ty, ty, dy == 1);
+        n += wx * wy * dent_texel(o, u32(x), u32(y));
+    }
+    return n / sqrt(dot3(n, n));
+}
+
+// The normal at world point p of object obj whose undented normal is n,
+// tilted by its dent maps; n where it has none or p is off the mapped side.
+fn dent_normal(obj: u32, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let o = objs[obj].dent;
+    if (o == NO_DENT) { return n; }
+    let r0 = dent_v3(o + 16u);
+    let r1 = dent_v3(o + 19u);
+    let r2 = dent_v3(o + 22u);
+    let d = (p - dent_v3(o + 12u)) / dent_f(o + 15u);
+    let q = vec3<f32>(dot3(r0, d), dot3(r1, d), dot3(r2, d));
+    let nl = vec3<f32>(dot3(r0, n), dot3(r1, n), dot3(r2, n));
+    var uv: vec2<f32>;
+    var du: vec3<f32>;
+    var dv: vec3<f32>;
+    if (dent_data[o] == 1u) {
+        // Planar along `axis`, seen from its + side: the picture's axes
+        // (a, sa) and (b, sb) as isoray-dent's `picture`.
+        let axis = dent_data[o + 1u];
+        if (!(nl[axis] > 0.0)) { return n; }
+        var a = 0u; var sa = 1.0; var b = 2u; var sb = 1.0;
+        if (axis == 0u) { a = 2u; sa = -1.0; b = 1u; sb = -1.0; }
+        if (axis == 2u) { b = 1u; sb = -1.0; }
+        let lo = vec2<f32>(dent_f(o + 8u), dent_f(o + 9u));
+        let hi = vec2<f32>(dent_f(o + 10u), dent_f(o + 11u));
+        uv = (vec2<f32>(sa * q[a], sb * q[b]) - lo) / (hi - lo);
+        if (any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0))) { return n; }
+        du = vec3<f32>(0.0);
+        du[a] = sa;
+        dv = vec3<f32>(0.0);
+        dv[b] = sb;
+    } else {
+        // Spherical: longitude from +z towards +x, colatitude from +y.
+        if (!(dot3(nl, q) > 0.0)) { return n; }
+        let r = sqrt(dot3(q, q));
+        if (r == 0.0) { return n; }
+        let u = atan2(q.x, q.z) / 6.283185307179586 + 0.5;
+        uv = vec2<f32>(u - floor(u), acos(clamp(q.y / r, -1.0, 1.0)) / 3.141592653589793);
+        du = vec3<f32>(q.z, 0.0, -q.x);
+        dv = cross(normalize_or_zero(du), q / r);
+    }
+    let t = normalize_or_zero(du - nl * dot3(du, nl));
+    var b = -normalize_or_zero(dv - nl * dot3(dv, nl));
+    if (dot3(b, b) == 0.0) { b = cross(nl, t); }
+    let ts = dent_normal_at(o, uv);
+    let local = ts.x * t + ts.y * b + ts.z * nl;
+    let w = r0 * local.x + r1 * local.y + r2 * local.z;
+    let l = sqrt(dot3(w, w));
+    if (!(l > 0.0) || !(l < iso_inf())) { return n; }
+    return w / l;
+}
+
 struct Hit { t: f32, steps: u32 }
 
 fn sphere_trace(kind: u32, o: vec3<f32>, dir: vec3<f32>, cap: f32) -> Hit {
@@ -1130,12 +1223,16 @@ fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult
             continue;
         }
         var surf: Surface;
+        var hn = h.n;
         if (h.mesh != NO_MESH) {
             surf = mesh_surface(h.mesh, h.p);
         } else {
             surf = material_at(h.p, inside);
+            // Dented objects' normals tilted by their normal maps.
+            hn = dent_normal(surf.obj, h.p, h.n);
         }
         if (first) {
+            res.n = hn;
             res.albedo = surf.m.diffuse;
             return res;
         }
@@ -1156,20 +1253,20 @@ fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult
             }
             var n2 = 1.0;
             if (after.len > 0u) { n2 = object_mat(media_top(after)).ior; }
-            let at = surface_interface(surf.m, ray.d, h.n, -dot3(h.n, ray.d), n1, n2);
+            let at = surface_interface(surf.m, ray.d, hn, -dot3(hn, ray.d), n1, n2);
             local = at.local;
             if (ray.depth < cfg.max_depth) {
                 let off = OFFSET * eps;
                 let wr = ray.w * at.reflect;
                 if (max3(wr) >= cfg.min_weight && top < cfg.stack_cap) {
-                    ray_push(top, PathRay(h.p + h.n * off, reflect_dir(ray.d, h.n), wr, h.p, media, ray.depth + 1u));
+                    ray_push(top, PathRay(h.p + hn * off, reflect_dir(ray.d, hn), wr, h.p, media, ray.depth + 1u));
                     top += 1u;
                     n_reflected += 1u;
                 }
                 if (at.can_refract) {
                     let wt = ray.w * at.transmit;
                     if (max3(wt) >= cfg.min_weight && top < cfg.stack_cap) {
-                        ray_push(top, PathRay(h.p - h.n * off, at.refracted, wt, h.p, after, ray.depth + 1u));
+                        ray_push(top, PathRay(h.p - hn * off, at.refracted, wt, h.p, after, ray.depth + 1u));
                         top += 1u;
                         n_refracted += 1u;
                     }
@@ -1177,7 +1274,7 @@ fn trace_path(o: vec3<f32>, d: vec3<f32>, seed0: u32, first: bool) -> PathResult
             }
         }
         let seed = seed0 + ray.depth;
-        sum += ray.w * shade(h.p, h.n, ray.d, surf.m, local, ray.media, seed);
+        sum += ray.w * shade(h.p, hn, ray.d, surf.m, local, ray.media, seed);
         continuing {
             // Depth first, as the CPU recurses: the last ray pushed next.
             let done = top == 0u;
