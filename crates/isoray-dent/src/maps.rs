@@ -104,32 +104,14 @@ impl DentMaps {
     /// normal map's normals in full precision (from the heights, as the
     /// 8-bit map is made, without its rounding).
     pub fn normal_at(&self, uv: [f64; 2]) -> V3 {
-        let (w, h) = (self.normals.width() as i64, self.normals.height() as i64);
-        let fx = uv[0] * w as f64 - 0.5;
-        let fy = uv[1] * h as f64 - 0.5;
-        let (x0, y0) = (fx.floor() as i64, fy.floor() as i64);
-        let (tx, ty) = (fx - x0 as f64, fy - y0 as f64);
-        let col = |x: i64| {
-            if self.options.wrap == Wrap::Clamp {
-                x.clamp(0, w - 1)
-            } else {
-                x.rem_euclid(w)
-            }
-        };
-        let row = |y: i64| y.clamp(0, h - 1);
         let mut n = [0.0f64; 3];
-        for (dx, dy, wgt) in [
-            (0, 0, (1.0 - tx) * (1.0 - ty)),
-            (1, 0, tx * (1.0 - ty)),
-            (0, 1, (1.0 - tx) * ty),
-            (1, 1, tx * ty),
-        ] {
+        for (x, y, wgt) in self.corners(uv) {
             let (v, _) = sobel_normal(
                 self.height.texels(),
                 self.height.width(),
                 self.height.height(),
-                col(x0 + dx) as u32,
-                row(y0 + dy) as u32,
+                x,
+                y,
                 &self.options,
             );
             for i in 0..3 {
@@ -138,6 +120,40 @@ impl DentMaps {
         }
         let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
         [n[0] / l, n[1] / l, n[2] / l]
+    }
+
+    /// How deep the dents are at uv (scene units below the untouched
+    /// surface, ≥ 0), bilinear over the texels as [`DentMaps::normal_at`].
+    pub fn depth_at(&self, uv: [f64; 2]) -> f64 {
+        self.corners(uv)
+            .into_iter()
+            .map(|(x, y, wgt)| wgt * (-self.height.displacement(x, y)).max(0.0))
+            .sum()
+    }
+
+    /// The four texels around uv (pixel centres at half-integers) and
+    /// their bilinear weights: columns wrap unless the map clamps, rows
+    /// clamp.
+    fn corners(&self, uv: [f64; 2]) -> [(u32, u32, f64); 4] {
+        let (w, h) = (self.height.width() as i64, self.height.height() as i64);
+        let fx = uv[0] * w as f64 - 0.5;
+        let fy = uv[1] * h as f64 - 0.5;
+        let (x0, y0) = (fx.floor() as i64, fy.floor() as i64);
+        let (tx, ty) = (fx - x0 as f64, fy - y0 as f64);
+        let col = |x: i64| {
+            if self.options.wrap == Wrap::Clamp {
+                x.clamp(0, w - 1) as u32
+            } else {
+                x.rem_euclid(w) as u32
+            }
+        };
+        let row = |y: i64| y.clamp(0, h - 1) as u32;
+        [
+            (col(x0), row(y0), (1.0 - tx) * (1.0 - ty)),
+            (col(x0 + 1), row(y0), tx * (1.0 - ty)),
+            (col(x0), row(y0 + 1), (1.0 - tx) * ty),
+            (col(x0 + 1), row(y0 + 1), tx * ty),
+        ]
     }
 
     /// The files of object `name`'s maps in `dir`: `NAME-height.png`

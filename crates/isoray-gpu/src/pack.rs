@@ -403,7 +403,16 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch, 
         .f(r.fixed_step as f32)
         .u(aa_pattern)
         .f(r.shadow_epsilon as f32);
-    out.u(raster.is_some() as u32).u(raster.unwrap_or(0)).u(0).u(0);
+    let parallax = match r.parallax {
+        isoray_scene::Parallax::None => 0,
+        isoray_scene::Parallax::Offset => 1,
+        isoray_scene::Parallax::Steep => 2,
+        isoray_scene::Parallax::Occlusion => 3,
+    };
+    out.u(raster.is_some() as u32)
+        .u(raster.unwrap_or(0))
+        .u(parallax)
+        .u(r.parallax_steps);
     debug_assert_eq!(out.0.len(), SETTINGS_WORDS);
     out
 }
@@ -577,7 +586,8 @@ pub(crate) const NO_DENT: u32 = u32::MAX;
 
 /// Words of a dented object's header in the dent buffer: mapping kind
 /// (1 planar, 2 spherical), axis, width, height, whether columns clamp,
-/// the offset of its texels; the planar picture's min u, v and max u, v;
+/// the offset of its texel normals, of its texel depths, and the map's
+/// range; the planar picture's min u, v and max u, v;
 /// the placement's position and scale, and the columns of its rotation.
 pub(crate) const DENT_HEADER: usize = 28;
 
@@ -585,6 +595,19 @@ pub(crate) const DENT_HEADER: usize = 28;
 /// the same (the scene holds it in an `Arc`).
 #[derive(Debug, Default)]
 pub(crate) struct DentCache(Vec<(Arc<DentMaps>, Arc<Vec<u32>>)>);
+
+/// A map's texels for the GPU: the normals ([`texel_normals`]), then each
+/// texel's depth below the untouched surface (f32, scene units, ≥ 0).
+fn texel_words(maps: &DentMaps) -> Vec<u32> {
+    let (w, h) = (maps.height.width(), maps.height.height());
+    let mut out = texel_normals(maps);
+    for y in 0..h {
+        for x in 0..w {
+            out.push(((-maps.height.displacement(x, y)).max(0.0) as f32).to_bits());
+        }
+    }
+    out
+}
 
 /// Each texel's Sobel normal (isoray-dent's, in full precision) as a
 /// `pack2x16snorm` of its x and y; z = sqrt(1 − x² − y²) ≥ 0.
@@ -621,7 +644,7 @@ pub(crate) fn dents(scene: &Scene, cache: &mut DentCache) -> (Words, Vec<u32>) {
     for (i, maps) in &dented {
         let words = match cache.0.iter().find(|(m, _)| Arc::ptr_eq(m, maps)) {
             Some((_, w)) => w.clone(),
-            None => Arc::new(texel_normals(maps)),
+            None => Arc::new(texel_words(maps)),
         };
         kept.0.push(((*maps).clone(), words.clone()));
         offsets[*i] = out.0.len() as u32;
@@ -631,7 +654,11 @@ pub(crate) fn dents(scene: &Scene, cache: &mut DentCache) -> (Words, Vec<u32>) {
         };
         let clamp_cols = maps.options.wrap == Wrap::Clamp;
         out.u(kind).u(axis).u(maps.height.width()).u(maps.height.height());
-        out.u(clamp_cols as u32).u(next).u(0).u(0);
+        let count = maps.height.width() * maps.height.height();
+        out.u(clamp_cols as u32)
+            .u(next)
+            .u(next + count)
+            .f(maps.height.range as f32);
         out.f(min[0] as f32).f(min[1] as f32).f(max[0] as f32).f(max[1] as f32);
         let place = scene.placement(*i);
         out.d3(place.position).f(place.scale as f32);

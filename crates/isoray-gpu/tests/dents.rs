@@ -136,4 +136,31 @@ fn dent_maps_shade_on_the_gpu_as_on_the_cpu() {
     // The same maps a second time come from the cache: the same image.
     let again = gpu(&mut g, &s);
     assert_eq!(again.color, d.color);
+    // Parallax mapping: each mode moves the CPU's normals over the dents,
+    // and the GPU's follow.
+    for mode in [
+        isoray_scene::Parallax::Offset,
+        isoray_scene::Parallax::Steep,
+        isoray_scene::Parallax::Occlusion,
+    ] {
+        let mut p = s.clone();
+        p.render.parallax = mode;
+        let (c2, d2) = (cpu(&p), gpu(&mut g, &p));
+        let (c2n, d2n) = (c2.normals.as_ref().unwrap(), d2.normals.as_ref().unwrap());
+        let (c2d, d2d) = (c2.depth.as_ref().unwrap(), d2.depth.as_ref().unwrap());
+        let (mut moved, mut px, mut agree) = (0, 0, 0);
+        for i in 0..c2n.len() {
+            if !(c2d[i].is_finite() && d2d[i].is_finite()) || angle(cn[i], fln[i]) <= 2.0 {
+                continue;
+            }
+            px += 1;
+            moved += usize::from(angle(c2n[i], cn[i]) > 1.0);
+            agree += usize::from(angle(c2n[i], d2n[i]) < 0.5);
+        }
+        assert!(moved * 4 > px, "{mode:?}: parallax moved {moved} of {px} dent pixels");
+        assert!(
+            agree as f64 > 0.95 * px as f64,
+            "{mode:?}: {agree} of {px} agree within 0.5°"
+        );
+    }
 }

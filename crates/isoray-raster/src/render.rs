@@ -300,13 +300,16 @@ impl Ctx<'_> {
     /// sight would otherwise read as the surface's inside).
     fn normal_at(&self, t: usize, b: [f64; 3], p: DVec3, viewer: DVec3) -> DVec3 {
         let n = self.tris.normal(t, b).as_dvec3();
-        let Some(w) = self
-            .scene
-            .dent_normal(self.tris.object[t] as usize, p.to_array(), n.to_array())
-        else {
+        let d = (p - viewer).normalize_or_zero();
+        let Some(w) = self.scene.dent_normal(
+            self.tris.object[t] as usize,
+            p.to_array(),
+            n.to_array(),
+            (-d).to_array(),
+        ) else {
             return n;
         };
-        let (w, d) = (DVec3::from_array(w), (p - viewer).normalize_or_zero());
+        let w = DVec3::from_array(w);
         let side = n.dot(d);
         if w.dot(d) * side > 0.0 {
             return w;

@@ -779,7 +779,7 @@ impl<'s> Worker<'s> {
             depth = self.hits.iter().map(|h| h.t).collect();
             let (surfaces, objects) = self.materials(ctx, &hs, &mut evals, false);
             // The shading normal: dented objects' tilted by their normal maps.
-            crate::dents::perturb(ctx.scene, &mut hs, &objects);
+            crate::dents::perturb(ctx.scene, &mut hs, &objects, &self.rays);
             normals = vec![[0.0; 3]; self.rays.len()];
             for (k, &i) in hs.idx.iter().enumerate() {
                 normals[i] = [hs.nx[k], hs.ny[k], hs.nz[k]];

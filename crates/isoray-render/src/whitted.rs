@@ -127,7 +127,7 @@ impl Worker<'_> {
                 // from the surface point the ray left to the one it reached.
                 let (surfaces, objects) = self.materials(ctx, &hs, &mut evals, inside);
                 // Dented objects' normals tilted by their normal maps.
-                crate::dents::perturb(ctx.scene, &mut hs, &objects);
+                crate::dents::perturb(ctx.scene, &mut hs, &objects, &self.rays);
                 if inside {
                     for (k, &i) in hs.idx.iter().enumerate() {
                         if let Some(o) = packet.media[i].top() {

@@ -149,6 +149,23 @@ pub enum StepLimit {
     Miss,
 }
 
+/// How the dents of a height map shift what a pixel shows (parallax mapping).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Parallax {
+    /// Normal mapping only: the normal at the hit's own texel.
+    None,
+    /// Welsh's offset limiting: the texel moved by depth × the view's
+    /// tangent component (not divided by its normal one, so grazing views
+    /// stay bounded).
+    Offset,
+    /// Steep parallax: the view ray marched down through layers of depth
+    /// to the first layer below the map.
+    Steep,
+    /// Parallax occlusion mapping: steep parallax, then the crossing
+    /// interpolated between the last two layers.
+    Occlusion,
+}
+
 /// Where a pixel's aa × aa samples lie.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AaPattern {
@@ -210,6 +227,15 @@ pub enum AoWeights {
     Halving,
     /// Every sample weighs 1 (their sum, unweighted), as the Unity thesis does.
     Uniform,
+}
+
+impl Named for Parallax {
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("none", Parallax::None),
+        ("offset", Parallax::Offset),
+        ("steep", Parallax::Steep),
+        ("occlusion", Parallax::Occlusion),
+    ];
 }
 
 impl Named for StepLimit {
@@ -364,6 +390,10 @@ settings! {
         /// Intersect objects that are exactly planes or spheres in closed
         /// form (not with `blend` > 0 or the steps view).
         analytic: bool = true, boolean(), "objects whose distance is exactly a plane's or a sphere's (recognised numerically, whatever the text) are intersected in closed form and the other objects are marched up to them; not with `blend` > 0 or `view = \"steps\"`";
+        /// Parallax mapping of dent maps.
+        parallax: Parallax = Parallax::None, choice::<Parallax>(), "parallax mapping of dent maps (`dents = \"bump\"`), in every renderer: `\"none\"` (normal mapping at the hit), `\"offset\"` (offset limiting: the texel shifted by depth × the view's tangent part), `\"steep\"` (the view ray marched down through `parallax_steps` layers) or `\"occlusion\"` (steep, with the crossing interpolated: parallax occlusion mapping)";
+        /// Layers of steep and occlusion parallax.
+        parallax_steps: u32 = 16, int(2, 256), "layers the view ray is marched through by `parallax = \"steep\"` and `\"occlusion\"`, over the deepest dent a map holds (half its `range`)";
     }
 }
 

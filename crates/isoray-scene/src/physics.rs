@@ -445,9 +445,11 @@ impl crate::Scene {
     /// The normal at world point `p` of object `object` whose undented
     /// normal there is `n`, tilted by its dent maps (`dents = "bump"` or
     /// `"auto"`): the height map's normal in the tangent frame of its uv
-    /// mapping, in full precision. None where the object has no maps, or
-    /// `p` is off the mapped side or region: the normal is then `n`.
-    pub fn dent_normal(&self, object: usize, p: [f64; 3], n: [f64; 3]) -> Option<[f64; 3]> {
+    /// mapping, in full precision, at the texel the view picks by
+    /// `render.parallax` (`to_eye`: the unit direction from `p` towards
+    /// the viewer; unused without parallax). None where the object has no
+    /// maps, or `p` is off the mapped side or region: the normal is then `n`.
+    pub fn dent_normal(&self, object: usize, p: [f64; 3], n: [f64; 3], to_eye: [f64; 3]) -> Option<[f64; 3]> {
         let o = self.objects.get(object)?;
         if !matches!(o.physics.dents, DentMode::Bump | DentMode::Auto) {
             return None;
@@ -461,6 +463,19 @@ impl crate::Scene {
         }
         let uv = maps.mapping.uv(q)?;
         let (t, b) = maps.mapping.frame(q, nl);
+        let frame = [t, b, nl];
+        let uv = match self.render.parallax {
+            crate::Parallax::None => uv,
+            mode => parallax_uv(
+                maps,
+                q,
+                frame,
+                place.dir_to_local(to_eye),
+                mode,
+                self.render.parallax_steps,
+            )
+            .unwrap_or(uv),
+        };
         let ts = maps.normal_at(uv);
         let local: [f64; 3] = std::array::from_fn(|i| ts[0] * t[i] + ts[1] * b[i] + ts[2] * nl[i]);
         let w = place.dir_to_world(local);
@@ -505,6 +520,64 @@ impl crate::Scene {
     }
 }
 
+/// The uv a view towards `to_eye` (the object's own axes) sees at the
+/// surface point q of a dented map, by parallax mapping in the tangent
+/// frame `[t, b, n]`: the view ray enters at q and goes down into the
+/// dents (depth below the untouched surface, `DentMaps::depth_at`).
+/// `Offset` moves q by depth × the view's tangent part (Welsh's offset
+/// limiting); `Steep` marches the ray down through `steps` layers over
+/// the deepest dent the map holds (range/2) to the first below the map;
+/// `Occlusion` interpolates the crossing between the last two layers.
+/// None for a view along or below the surface.
+fn parallax_uv(
+    maps: &isoray_dent::DentMaps,
+    q: [f64; 3],
+    [t, b, n]: [[f64; 3]; 3],
+    to_eye: [f64; 3],
+    mode: crate::Parallax,
+    steps: u32,
+) -> Option<[f64; 2]> {
+    let dot = |a: [f64; 3], c: [f64; 3]| a[0] * c[0] + a[1] * c[1] + a[2] * c[2];
+    let (vx, vy, vz) = (dot(to_eye, t), dot(to_eye, b), dot(to_eye, n));
+    if vz <= 1e-6 {
+        return None;
+    }
+    // The surface point moved by (dx, dy) in the tangent plane, and its uv.
+    let at = |dx: f64, dy: f64| -> Option<[f64; 2]> {
+        maps.mapping.uv(std::array::from_fn(|i| q[i] + dx * t[i] + dy * b[i]))
+    };
+    match mode {
+        crate::Parallax::None => maps.mapping.uv(q),
+        crate::Parallax::Offset => {
+            let d = maps.depth_at(maps.mapping.uv(q)?);
+            at(-d * vx, -d * vy)
+        }
+        crate::Parallax::Steep | crate::Parallax::Occlusion => {
+            // Along the ray, depth s lies (s/vz)·(vx, vy) back from q.
+            let layer = 0.5 * maps.height.range / steps as f64;
+            let (sx, sy) = (-vx / vz, -vy / vz);
+            let mut before: Option<(f64, f64)> = None; // (depth of the ray, gap to the map)
+            for i in 0..=steps {
+                let s = i as f64 * layer;
+                let uv = at(s * sx, s * sy)?;
+                let gap = maps.depth_at(uv) - s;
+                if gap <= 0.0 {
+                    if mode == crate::Parallax::Steep {
+                        return Some(uv);
+                    }
+                    let s = match before {
+                        Some((s0, g0)) => s0 + (s - s0) * g0 / (g0 - gap),
+                        None => s,
+                    };
+                    return at(s * sx, s * sy);
+                }
+                before = Some((s, gap));
+            }
+            at(0.5 * maps.height.range * sx, 0.5 * maps.height.range * sy)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -536,6 +609,45 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Parallax over a flat-bottomed pit of depth D seen 30° off the
+    /// normal: offset limiting moves the texel by D·sin θ, steep parallax
+    /// by the first layer below D times tan θ, occlusion by D·tan θ (the
+    /// ray's exact crossing of the flat bottom).
+    #[test]
+    fn parallax_finds_the_bottom_of_a_pit() {
+        let settings = DentMapSettings {
+            size: 256,
+            range: 0.2,
+            uv: "planar-xz".into(),
+            extent: 1.0,
+        };
+        let mut maps = settings.blank().unwrap();
+        let depth = 0.07;
+        let h = maps.height.value_of(-depth);
+        for y in 64..192 {
+            for x in 64..192 {
+                maps.height.lower_min(x, y, h);
+            }
+        }
+        assert!((maps.depth_at([0.5, 0.5]) - depth).abs() < 1e-6);
+        let q = [0.0, 0.0, 0.0];
+        let n = [0.0, 1.0, 0.0];
+        let (t, b) = maps.mapping.frame(q, n);
+        // The eye 30° from the normal, towards +t (+x: u grows with x).
+        let th = 30f64.to_radians();
+        let eye: [f64; 3] = std::array::from_fn(|i| th.sin() * t[i] + th.cos() * n[i]);
+        let u_of = |mode, steps| parallax_uv(&maps, q, [t, b, n], eye, mode, steps).unwrap()[0];
+        // u spans 2 scene units over [0, 1]; the view moves the texel away from the eye.
+        let shift = |u: f64| (0.5 - u) * 2.0;
+        let d = depth as f32 as f64; // the map keeps f32 texels
+        assert!((shift(u_of(crate::Parallax::Offset, 16)) - d * th.sin()).abs() < 1e-6);
+        assert!((shift(u_of(crate::Parallax::Occlusion, 16)) - d * th.tan()).abs() < 1e-6);
+        let layer = 0.1 / 16.0;
+        let steep = (d / layer).ceil() * layer * th.tan();
+        assert!((shift(u_of(crate::Parallax::Steep, 16)) - steep).abs() < 1e-6);
+        assert_eq!(parallax_uv(&maps, q, [t, b, n], t, crate::Parallax::Offset, 16), None);
     }
 
     #[test]
