@@ -104,6 +104,14 @@ pub fn texels_near(mapping: &UvMapping, w: u32, h: u32, reach: Sphere) -> Vec<Re
             let (y0, y1) = texel_range(c[1] - dv, c[1] + dv, h);
             vec![Rect::new(x0, y0, x1, y1)]
         }
+        UvMapping::Parametric(ref m) => match m.uv_box_near(reach.centre, reach.radius) {
+            None => Vec::new(),
+            Some(b) => {
+                let (x0, x1) = texel_range(b[0], b[2], w);
+                let (y0, y1) = texel_range(b[1], b[3], h);
+                vec![Rect::new(x0, y0, x1, y1)]
+            }
+        },
         UvMapping::Spherical { .. } => {
             let dist = length(reach.centre);
             if dist <= reach.radius {
@@ -357,7 +365,16 @@ fn imprint_one(
     if b.distance(p0) >= current.abs() - m.epsilon {
         return;
     }
-    let n = a.normal(p0, step);
+    // Outward on the mapped side: against the texel's line into the
+    // surface (a parametric sheet's field may point either way).
+    let mut n = a.normal(p0, step);
+    let (_, into) = mapping.line(
+        (x as f64 + 0.5) / map.width() as f64,
+        (y as f64 + 0.5) / map.height() as f64,
+    );
+    if dot(n, into) > 0.0 {
+        n = scale(n, -1.0);
+    }
     let q = along(p0, n, -current);
     if b.distance(q) >= -m.epsilon {
         return;

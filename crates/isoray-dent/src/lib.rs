@@ -41,6 +41,7 @@ pub mod imprint;
 pub mod impulse;
 pub mod maps;
 pub mod normalmap;
+pub mod param;
 pub mod uv;
 mod vec;
 

@@ -15,6 +15,10 @@
 //!   origin (a sphere, an ellipsoid, a box, any convex body around it);
 //!   columns wrap around, rows stop at the poles.
 //!
+//! - [`UvMapping::Parametric`] is a parametric surface's own (s, t),
+//!   scaled to [0, 1] over its domain: one-to-one wherever the surface does
+//!   not cross itself; the side its ∂X/∂s × ∂X/∂t points to is mapped.
+//!
 //! Triplanar mapping (three planar projections blended by the normal) is
 //! not one-to-one: opposite faces share texels and the blend mixes three of
 //! them; it is refused for dents.
@@ -49,6 +53,10 @@ pub enum UvMapping {
         /// Where the projection lines start (beyond the body).
         from: f64,
     },
+    /// A parametric surface's (s, t), scaled to [0, 1] over its domain
+    /// (see [`crate::param`]); lines start just off the surface along its
+    /// normal.
+    Parametric(crate::param::ParametricUv),
 }
 
 /// The picture's column and row directions when looking along −`axis`:
@@ -100,7 +108,7 @@ impl UvMapping {
                     .into(),
             ),
             other => Err(format!(
-                "unknown uv mapping `{other}`: expected planar-xy, planar-xz, planar-yz or spherical"
+                "unknown uv mapping `{other}`: expected planar-xy, planar-xz, planar-yz, spherical or parametric"
             )),
         }
     }
@@ -113,6 +121,22 @@ impl UvMapping {
         match *self {
             UvMapping::Planar { axis, .. } => n[axis] > 0.0,
             UvMapping::Spherical { .. } => dot(n, q) > 0.0,
+            // Either side of a sheet: its field's normal may point either
+            // way; `side` says which the map's dents face.
+            UvMapping::Parametric(ref m) => m.invert(q).is_some() && dot(n, n) > 0.0,
+        }
+    }
+
+    /// +1 when `n` at q points to the side the map's dents are seen from
+    /// (always, but for a parametric sheet: the side of ∂X/∂s × ∂X/∂t),
+    /// −1 on the other side of a sheet.
+    pub fn side(&self, q: V3, n: V3) -> f64 {
+        match self {
+            UvMapping::Parametric(m) => match m.invert(q) {
+                Some(uv) if dot(n, m.normal(uv[0], uv[1])) < 0.0 => -1.0,
+                _ => 1.0,
+            },
+            _ => 1.0,
         }
     }
 
@@ -135,6 +159,11 @@ impl UvMapping {
                 d[axis] = -1.0;
                 (o, d)
             }
+            UvMapping::Parametric(ref m) => {
+                let (p, _, _) = m.point(u, v);
+                let n = m.normal(u, v);
+                (crate::vec::add(p, scale(n, 1e-3 * m.span())), scale(n, -1.0))
+            }
             UvMapping::Spherical { from } => {
                 let dir = sphere_dir(u, v);
                 (scale(dir, from), scale(dir, -1.0))
@@ -149,6 +178,7 @@ impl UvMapping {
                 let [u, v] = self.planar_uv(p)?;
                 ((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v)).then_some([u, v])
             }
+            UvMapping::Parametric(ref m) => m.invert(p),
             UvMapping::Spherical { .. } => {
                 let r = dot(p, p).sqrt();
                 if r == 0.0 {
@@ -186,6 +216,13 @@ impl UvMapping {
                 dv[b] = sb;
                 (du, dv)
             }
+            UvMapping::Parametric(ref m) => match m.invert(p) {
+                Some(uv) => {
+                    let (_, du, dv) = m.point(uv[0], uv[1]);
+                    (du, dv)
+                }
+                None => ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+            },
             UvMapping::Spherical { .. } => {
                 // East (growing longitude) and south (growing colatitude).
                 let east = [p[2], 0.0, -p[0]];

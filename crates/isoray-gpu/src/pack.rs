@@ -635,6 +635,8 @@ pub(crate) fn dents(scene: &Scene, cache: &mut DentCache) -> (Words, Vec<u32>) {
         .enumerate()
         .filter(|(_, o)| matches!(o.physics.dents, DentMode::Bump | DentMode::Auto))
         .filter_map(|(i, o)| o.physics.maps.as_ref().map(|m| (i, m)))
+        // Parametric mappings are inverted on the CPU only: drawn undented here.
+        .filter(|(_, m)| !matches!(m.mapping, UvMapping::Parametric(_)))
         .collect();
     let mut offsets = vec![NO_DENT; scene.objects.len()];
     let mut out = Words::default();
@@ -651,6 +653,7 @@ pub(crate) fn dents(scene: &Scene, cache: &mut DentCache) -> (Words, Vec<u32>) {
         let (kind, axis, min, max) = match maps.mapping {
             UvMapping::Planar { axis, min, max, .. } => (1, axis as u32, min, max),
             UvMapping::Spherical { .. } => (2, 0, [0.0; 2], [1.0; 2]),
+            UvMapping::Parametric(_) => unreachable!("left out above"),
         };
         let clamp_cols = maps.options.wrap == Wrap::Clamp;
         out.u(kind).u(axis).u(maps.height.width()).u(maps.height.height());

@@ -125,6 +125,8 @@ pub struct DentMapSettings {
     pub uv: String,
     /// The mapped region: the object's own cube [−extent, extent]³.
     pub extent: f64,
+    /// With `uv = "parametric"`: the object's parametric surface, sampled.
+    pub parametric: Option<isoray_dent::param::ParametricUv>,
 }
 
 impl Default for DentMapSettings {
@@ -134,6 +136,7 @@ impl Default for DentMapSettings {
             range: 0.05,
             uv: "planar-xz".into(),
             extent: 1.0,
+            parametric: None,
         }
     }
 }
@@ -141,6 +144,12 @@ impl Default for DentMapSettings {
 impl DentMapSettings {
     /// The uv mapping these settings name.
     pub fn mapping(&self) -> std::result::Result<isoray_dent::uv::UvMapping, String> {
+        if self.uv == "parametric" {
+            return match &self.parametric {
+                Some(m) => Ok(isoray_dent::uv::UvMapping::Parametric(m.clone())),
+                None => Err("uv = \"parametric\" needs the object's shape to call a parametric surface".into()),
+            };
+        }
         let e = self.extent;
         isoray_dent::uv::UvMapping::named(&self.uv, [-e; 3], [e; 3])
     }
@@ -150,10 +159,10 @@ impl DentMapSettings {
         let mapping = self.mapping()?;
         // A texel's size in scene units: the planar picture's side, or a
         // row of the spherical map (half a great circle) over the texels.
-        let across = if mapping.wraps_columns() {
-            std::f64::consts::PI * self.extent
-        } else {
-            2.0 * self.extent
+        let across = match &mapping {
+            isoray_dent::uv::UvMapping::Parametric(m) => m.span(),
+            m if m.wraps_columns() => std::f64::consts::PI * self.extent,
+            _ => 2.0 * self.extent,
         };
         Ok(isoray_dent::DentMaps::new(
             mapping,
@@ -187,6 +196,24 @@ pub struct ObjectPhysics {
     pub dent_rim: f64,
 }
 
+/// Samples per side of a parametric dent mapping's grid.
+const PARAMETRIC_SAMPLES: usize = 129;
+
+/// The (s, t) mapping of the parametric surface `name` of `lib` (default
+/// parameters), for `uv = "parametric"`.
+pub(crate) fn parametric_mapping(
+    lib: &isoray_shape::Library,
+    name: &str,
+) -> std::result::Result<isoray_dent::param::ParametricUv, String> {
+    let coords = lib.parametric_coords(name, None).map_err(|d| d.message.clone())?;
+    let [[s0, s1], [t0, t1]] = coords.domain;
+    let mut evals = coords.coords.each_ref().map(isoray_shape::PointEvaluator::<f64>::new);
+    isoray_dent::param::ParametricUv::new(name, PARAMETRIC_SAMPLES, |u, v| {
+        let (s, t) = (s0 + u * (s1 - s0), t0 + v * (t1 - t0));
+        Some(std::array::from_fn(|k| evals[k].eval(&[], s, t, 0.0)))
+    })
+}
+
 impl ObjectPhysics {
     /// The object's dent maps as they are now: a copy of its maps, or
     /// untouched ones of its `dent_map` settings.
@@ -215,7 +242,7 @@ const DENTS: &[(&str, DentMode)] = &[
     ("sdf", DentMode::Sdf),
     ("auto", DentMode::Auto),
 ];
-const UVS: &[&str] = &["planar-xz", "planar-xy", "planar-yz", "spherical"];
+const UVS: &[&str] = &["planar-xz", "planar-xy", "planar-yz", "spherical", "parametric"];
 
 /// The object keys of this module, for `object_keys`.
 pub(crate) fn object_physics_keys() -> Vec<KeySpec> {
@@ -264,7 +291,7 @@ pub(crate) fn object_physics_keys() -> Vec<KeySpec> {
             "dent_map",
             Kind::Text("inline table"),
             "{ size = 512, range = 0.05, uv = \"planar-xz\", extent = 1.0 }",
-            "its height map: `size` texels a side, `range` scene units of a full height unit (dents down to range/2), `uv` the mapping (`planar-xz`, `planar-xy`, `planar-yz`: a height field seen from the + side of y, z, x; `spherical`: a body around its origin), `extent`: the mapped region is the object's own cube [−extent, extent]³",
+            "its height map: `size` texels a side, `range` scene units of a full height unit (dents down to range/2), `uv` the mapping (`planar-xz`, `planar-xy`, `planar-yz`: a height field seen from the + side of y, z, x; `spherical`: a body around its origin; `parametric`: the (s, t) of the parametric surface its shape calls, with its default parameters), `extent`: the mapped region is the object's own cube [−extent, extent]³",
         ),
     ]
 }
@@ -290,7 +317,12 @@ pub(crate) fn read_object_physics(src: &Sources, r: &mut Reader, ctx: &str) -> R
         let uv = match m.string("uv")? {
             None => d.uv,
             Some((name, loc)) => {
-                if let Err(why) = isoray_dent::uv::UvMapping::named(name, [-1.0; 3], [1.0; 3]) {
+                let known = if name == "parametric" {
+                    Ok(())
+                } else {
+                    isoray_dent::uv::UvMapping::named(name, [-1.0; 3], [1.0; 3]).map(|_| ())
+                };
+                if let Err(why) = known {
                     let notes = match isoray_shape::diag::suggest(name, UVS.iter().copied()) {
                         Some(s) if name != "triplanar" => vec![format!("did you mean \"{s}\"?")],
                         _ => vec![],
@@ -313,6 +345,7 @@ pub(crate) fn read_object_physics(src: &Sources, r: &mut Reader, ctx: &str) -> R
             range,
             uv,
             extent,
+            parametric: None,
         };
     }
     Ok(out)
@@ -462,6 +495,10 @@ impl crate::Scene {
             return None;
         }
         let uv = maps.mapping.uv(q)?;
+        // Seen from the back of a parametric sheet, the dents are bumps:
+        // the normal of the front, negated.
+        let side = maps.mapping.side(q, nl);
+        let nl = nl.map(|c| c * side);
         let (t, b) = maps.mapping.frame(q, nl);
         let frame = [t, b, nl];
         let uv = match self.render.parallax {
@@ -477,7 +514,7 @@ impl crate::Scene {
             .unwrap_or(uv),
         };
         let ts = maps.normal_at(uv);
-        let local: [f64; 3] = std::array::from_fn(|i| ts[0] * t[i] + ts[1] * b[i] + ts[2] * nl[i]);
+        let local: [f64; 3] = std::array::from_fn(|i| side * (ts[0] * t[i] + ts[1] * b[i] + ts[2] * nl[i]));
         let w = place.dir_to_world(local);
         let l = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
         (l > 0.0 && l.is_finite()).then(|| w.map(|c| c / l))
@@ -622,6 +659,7 @@ mod tests {
             range: 0.2,
             uv: "planar-xz".into(),
             extent: 1.0,
+            parametric: None,
         };
         let mut maps = settings.blank().unwrap();
         let depth = 0.07;
@@ -648,6 +686,26 @@ mod tests {
         let steep = (d / layer).ceil() * layer * th.tan();
         assert!((shift(u_of(crate::Parallax::Steep, 16)) - steep).abs() < 1e-6);
         assert_eq!(parallax_uv(&maps, q, [t, b, n], t, crate::Parallax::Offset, 16), None);
+    }
+
+    #[test]
+    fn a_parametric_mapping_needs_a_parametric_surface() {
+        let text = "[[object]]\nshape = \"sphere(p, 1.0)\"\ndents = \"bump\"\ndent_map = { uv = \"parametric\" }\n";
+        let e = crate::load_str(text, "t.toml", &[]).unwrap_err();
+        assert!(
+            e.rendered
+                .contains("needs the object's shape to call a parametric surface"),
+            "{}",
+            e.rendered
+        );
+        assert!(e.rendered.contains("t.toml:1:"), "{}", e.rendered);
+        let ok = "[surface.patch]\nparametric = { x = \"s\", y = \"0.1*s*t\", z = \"t\" }\nimage_only = true\n\
+                  [[object]]\nshape = \"patch(p)\"\ndents = \"bump\"\ndent_map = { uv = \"parametric\" }\n";
+        let s = crate::load_str(ok, "t.toml", &[]).unwrap_or_else(|e| panic!("{e}"));
+        let m = s.objects[0].physics.dent_map.mapping().unwrap();
+        // (s, t) = (0.5, −0.5) is (u, v) = (0.75, 0.25) over the default domain [−1, 1]².
+        let uv = m.uv([0.5, -0.025, -0.5]).unwrap();
+        assert!((uv[0] - 0.75).abs() < 1e-6 && (uv[1] - 0.25).abs() < 1e-6, "{uv:?}");
     }
 
     #[test]

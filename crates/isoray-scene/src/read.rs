@@ -634,6 +634,28 @@ impl<'a> Build<'a> {
                             })
                         })
                         .map_err(|d| shape_error(snippets, d))?;
+                    // uv = "parametric": the (s, t) of the parametric surface it calls.
+                    if physics.dent_map.uv == "parametric" {
+                        let key = format!("object.{i}.dent_map");
+                        let at = ov.origin;
+                        let surface = fragment.called.iter().find(|c| {
+                            lib.surface(c)
+                                .is_some_and(|s| s.mode == isoray_shape::SurfaceMode::Parametric)
+                        });
+                        let Some(name) = surface else {
+                            return Err(src
+                                .error(
+                                    at,
+                                    format!("`{key}.uv = \"parametric\"` needs the object's shape to call a parametric surface"),
+                                    Some("no parametric surface called"),
+                                    &["define one with [surface.NAME] x, y, z of s and t, and call it: shape = \"NAME(p)\"".into()],
+                                )
+                                .with_key(key));
+                        };
+                        let m = crate::physics::parametric_mapping(lib, name)
+                            .map_err(|e| src.error(at, format!("`{key}`: {e}"), None, &[]).with_key(key.clone()))?;
+                        physics.dent_map.parametric = Some(m);
+                    }
                     // Without a material of its own, an object takes the default
                     // material of the first surface its shape calls.
                     let material = material.unwrap_or_else(|| {

@@ -86,7 +86,19 @@ pub fn dent_impact(scene: &mut Scene, impact: &Impact, method: ImprintMethod) ->
         }
         // The normal from the struck object towards the impactor.
         let n = impact.normal.map(|c| c * sign);
-        let shift = depth - impact.penetration;
+        // How far the impactor already overlaps the struck object along
+        // n, measured on their fields (the solver's penetration of a mesh
+        // collider can be off by its contact margin), then pushed the rest.
+        let overlap = overlap_along(
+            scene,
+            struck,
+            other,
+            impact.point,
+            n,
+            impact.penetration.abs().max(depth),
+        )
+        .unwrap_or(impact.penetration);
+        let shift = depth - overlap;
         let deep = depth >= 0.25 * o.physics.dent_map.range;
         if mode == DentMode::Sdf || (mode == DentMode::Auto && deep) {
             cut(scene, impact, struck, other, n, shift, &mut record)?;
@@ -143,6 +155,25 @@ pub fn dent_impact(scene: &mut Scene, impact: &Impact, method: ImprintMethod) ->
         out.push(record);
     }
     Ok(out)
+}
+
+/// The overlap of object `other` into object `struck` along the line
+/// through `p` with direction `n` (from `struck` towards `other`): A's
+/// surface on the line minus B's lowest point on it, both found by sphere
+/// tracing from `reach`·10 away (positive when they overlap, negative for
+/// a gap). None when either is not found.
+fn overlap_along(scene: &Scene, struck: usize, other: usize, p: [f64; 3], n: [f64; 3], reach: f64) -> Option<f64> {
+    use isoray_dent::field::{first_hit, March};
+    let r = 10.0 * reach + 1e-6;
+    let inputs = &scene.inputs;
+    let (a, b) = (&scene.objects[struck].shape, &scene.objects[other].shape);
+    let fa = |q: [f64; 3]| a.eval_with(inputs, q);
+    let fb = |q: [f64; 3]| b.eval_with(inputs, q);
+    let at = |s: f64| -> [f64; 3] { std::array::from_fn(|k| p[k] + s * n[k]) };
+    let down = n.map(|c| -c);
+    let s_a = r - first_hit(&fa, at(r), down, 2.0 * r, March::default())?;
+    let s_b = -r + first_hit(&fb, at(-r), n, 2.0 * r, March::default())?;
+    Some(s_a - s_b)
 }
 
 /// Cuts the impactor `other`, pushed `shift` along −`n` from its pose in

@@ -328,14 +328,39 @@ fn collider_of(scene: &Scene, i: usize, place: &Placement, kind: BodyKind) -> Re
             None => {}
         }
     }
-    // The object's mesh, in its own frame (scaled: rapier bodies have no scale).
-    let tape = o.shape.tape().bind(&scene.inputs);
-    let settings = isoray_mesh::MeshSettings {
-        resolution: 48,
-        ..Default::default()
+    // The object's mesh, in its own frame (scaled: rapier bodies have no
+    // scale): a parametric dent map's sheet is its sampled (s, t) grid (a
+    // sheet's field has no inside to mesh), anything else is meshed.
+    let mesh = match &o.physics.dent_map.parametric {
+        Some(m) if o.physics.dent_map.uv == "parametric" => {
+            let (n, pts) = m.grid();
+            let at = |i: usize, j: usize| (j * n + i) as u32;
+            let mut triangles = Vec::with_capacity(2 * (n - 1) * (n - 1));
+            for j in 0..n - 1 {
+                for i in 0..n - 1 {
+                    triangles.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+                    triangles.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+                }
+            }
+            // The grid is in the object's own coordinates: to the world first.
+            let positions = pts.iter().map(|q| place.to_world(*q).map(|x| x as f32)).collect();
+            isoray_mesh::Mesh {
+                positions,
+                triangles,
+                ..Default::default()
+            }
+        }
+        _ => {
+            let tape = o.shape.tape().bind(&scene.inputs);
+            let settings = isoray_mesh::MeshSettings {
+                resolution: 48,
+                ..Default::default()
+            };
+            isoray_mesh::mesh_shape(&tape, &settings)
+                .map_err(|e| err(format!("cannot mesh it for its collider: {e}")))?
+                .0
+        }
     };
-    let (mesh, _) =
-        isoray_mesh::mesh_shape(&tape, &settings).map_err(|e| err(format!("cannot mesh it for its collider: {e}")))?;
     let points: Vec<Vector> = mesh
         .positions
         .iter()

@@ -245,3 +245,27 @@ fn a_drop_cuts_a_crater_as_deep_as_the_model_says() {
     let rec = dent_impact(&mut s, &i, ImprintMethod::Texel).unwrap();
     assert!(rec[0].geometry && s.objects[0].physics.sdf_dents.len() == 1);
 }
+
+/// examples/dents-dome.toml: balls strike a parametric dome, which
+/// collides as its sampled (s, t) grid and is dented in its own (s, t).
+#[test]
+fn balls_strike_and_dent_a_parametric_surface() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/dents-dome.toml");
+    let mut s = isoray_scene::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let i = first_impact(&mut s, 2.0).expect("an impact");
+    assert_eq!((i.a, i.b), (0, 1), "ball1 strikes the dome first");
+    // The contact is on the dome y = −(x² + z²)/4 (the grid's chords are
+    // within a millimetre of it), under the ball dropped at (0.35, ·, 0.15).
+    let p = i.point;
+    assert!((p[1] + 0.25 * (p[0] * p[0] + p[2] * p[2])).abs() < 5e-3, "{p:?}");
+    assert!((p[0] - 0.35).abs() < 0.05 && (p[2] - 0.15).abs() < 0.05, "{p:?}");
+    let rec = dent_impact(&mut s, &i, ImprintMethod::Texel).unwrap();
+    let want = 0.5 * 0.00006 * (i.impulse - 0.3 / 0.7);
+    assert!((rec[0].depth - want).abs() < 1e-12 && rec[0].texels > 50, "{rec:?}");
+    let maps = s.objects[0].physics.maps.as_ref().unwrap();
+    assert!(
+        (maps.height.deepest() - want).abs() < 0.05 * want,
+        "{} vs {want}",
+        maps.height.deepest()
+    );
+}

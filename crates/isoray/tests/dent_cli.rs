@@ -392,3 +392,65 @@ fn sdf_dents_are_saved_and_meshed() {
     assert!(caps > 1e-4, "{caps}");
     assert!((missing - caps).abs() < 0.05 * caps, "missing {missing} vs caps {caps}");
 }
+
+/// `uv = "parametric"`: a dome given as x = t, y = −(s² + t²)/5, z = s
+/// over [−1, 1]² is dented at (x, z) = (0.3, 0.2), on the surface, 3 cm
+/// deep: the deepest texel is 3 cm down (the texel method along the true
+/// normal), at the texel of (s, t) = (0.2, 0.3); the dent shades.
+#[test]
+fn a_parametric_surface_is_dented_in_its_own_s_t() {
+    let path = tmp("dome.toml");
+    std::fs::write(
+        &path,
+        "[camera]\nposition = [0.0, 1.6, 2.2]\ntarget = [0.0, 0.1, 0.0]\nfov = 40.0\n\
+         [render]\nwidth = 96\nheight = 60\n\
+         [[light]]\nkind = \"directional\"\ndirection = [-0.5, 1.0, 0.3]\n\
+         [surface.dome]\nparametric = { x = \"t\", y = \"-0.2*(s^2+t^2)\", z = \"s\" }\n\
+         domain = { s = [-1.0, 1.0], t = [-1.0, 1.0] }\n\
+         [[object]]\nname = \"dome\"\nshape = \"dome(p)\"\ndents = \"bump\"\n\
+         dent_map = { size = 256, range = 0.1, uv = \"parametric\" }\n",
+    )
+    .unwrap();
+    let maps = tmp("maps-dome");
+    let (s, m) = (path.to_str().unwrap(), maps.to_str().unwrap());
+    let y = -0.2 * (0.3f64 * 0.3 + 0.2 * 0.2);
+    let at = format!("0.3,{y},0.2");
+    ok(&isoray(&[
+        "dent",
+        s,
+        "dome",
+        "--at",
+        &at,
+        "--normal",
+        "0.12,1,0.08",
+        "--depth",
+        "0.03",
+        "--radius",
+        "0.25",
+        "--maps",
+        m,
+    ]));
+    let h = isoray_dent::HeightMap::read_png(&maps.join("dome-height.png"), 0.1).unwrap();
+    let (mut deepest, mut at_xy) = (0.0f64, (0, 0));
+    for y in 0..256 {
+        for x in 0..256 {
+            let d = -h.displacement(x, y);
+            if d > deepest {
+                (deepest, at_xy) = (d, (x, y));
+            }
+        }
+    }
+    assert!((deepest - 0.03).abs() < 0.001, "{deepest}");
+    // u from s = z = 0.2, v from t = x = 0.3: texel (153.6, 166.4) − ½.
+    assert!(at_xy.0.abs_diff(153) <= 2 && at_xy.1.abs_diff(166) <= 2, "{at_xy:?}");
+    // Drawn with the maps, the dent shades; without, it does not.
+    let (with, without) = (tmp("dome-with.png"), tmp("dome-without.png"));
+    ok(&isoray(&["render", s, "--maps", m, "-o", with.to_str().unwrap()]));
+    ok(&isoray(&["render", s, "-o", without.to_str().unwrap()]));
+    let (a, b) = (
+        image::open(&with).unwrap().into_rgb8(),
+        image::open(&without).unwrap().into_rgb8(),
+    );
+    let changed = a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count();
+    assert!(changed > 5 && changed < 200, "{changed} pixels changed");
+}
