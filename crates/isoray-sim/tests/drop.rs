@@ -269,3 +269,19 @@ fn balls_strike_and_dent_a_parametric_surface() {
         maps.height.deepest()
     );
 }
+
+/// A body's mass is its density times its volume: exact for a ball (an
+/// exact collider) and, through the hull of its sharp-edged mesh, for a
+/// box within a thousandth.
+#[test]
+fn masses_are_density_times_volume() {
+    let text = "[material.m]\ndensity = 1000.0\n\
+                [[object]]\nshape = \"box(p, vec3(0.5, 0.25, 0.1))\"\nmaterial = \"m\"\nposition = [0.0, 2.0, 0.0]\nbody = \"dynamic\"\n\
+                [[object]]\nshape = \"sphere(p, 0.2)\"\nmaterial = \"m\"\nposition = [3.0, 2.0, 0.0]\nbody = \"dynamic\"\n";
+    let s = isoray_scene::load_str(text, "m.toml", &[]).unwrap();
+    let sim = Simulation::new(&s).unwrap();
+    let box_mass = sim.mass(0).unwrap();
+    assert!((box_mass - 100.0).abs() < 0.1, "{box_mass}");
+    let ball = 1000.0 * 4.0 / 3.0 * std::f64::consts::PI * 0.008;
+    assert!((sim.mass(1).unwrap() - ball).abs() < 1e-3 * ball, "{:?}", sim.mass(1));
+}
