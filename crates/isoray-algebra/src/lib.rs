@@ -18,6 +18,7 @@
 //! ```
 
 pub mod coeff;
+pub mod f4;
 pub mod fglm;
 pub mod gcd;
 pub mod groebner;

@@ -52,16 +52,53 @@ fn located(origin: &str, text: &str, e: &ParseError) -> String {
     )
 }
 
+/// What `isoray groebner` was asked.
+#[derive(clap::Args, Clone, Debug)]
+pub struct GroebnerArgs {
+    /// Variables, largest first: x,y,z.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub vars: Vec<String>,
+    /// Monomial order: lex, deglex, grevlex, weighted:W1,W2,... or block:N1,N2,...
+    #[arg(long, default_value = "grevlex")]
+    pub order: String,
+    /// 0 for the rationals, or a prime p for GF(p).
+    #[arg(long, default_value_t = 0)]
+    pub field: u64,
+    /// Print statistics to stderr.
+    #[arg(long)]
+    pub stats: bool,
+    /// Read polynomials from FILE, one per line (`-` for stdin).
+    #[arg(long, value_name = "FILE")]
+    pub input: Option<String>,
+    /// Stop with an error after this many seconds.
+    #[arg(long, value_name = "SECONDS")]
+    pub timeout: Option<f64>,
+    /// f4 (Faugère's F4; over Q multi-modular) or buchberger (the
+    /// reference engine).
+    #[arg(long, default_value = "f4")]
+    pub algorithm: String,
+    /// The generators (put `--` before them if one starts with `-`).
+    pub polys: Vec<String>,
+}
+
 /// `isoray groebner`.
-pub fn cmd_groebner(
-    vars: &[String],
-    order: &str,
-    field: u64,
-    stats: bool,
-    input: Option<&str>,
-    timeout: Option<f64>,
-    polys: &[String],
-) -> Result<(), Failure> {
+pub fn cmd_groebner(args: &GroebnerArgs) -> Result<(), Failure> {
+    let (vars, order, field, stats) = (&args.vars, args.order.as_str(), args.field, args.stats);
+    let (input, timeout, algorithm, polys) = (
+        args.input.as_deref(),
+        args.timeout,
+        args.algorithm.as_str(),
+        &args.polys,
+    );
+    let f4 = match algorithm {
+        "f4" => true,
+        "buchberger" => false,
+        _ => {
+            return Err(bad(format!(
+                "--algorithm: expected f4 or buchberger, found `{algorithm}`"
+            )))
+        }
+    };
     if vars.is_empty()
         || vars.iter().any(|v| {
             v.is_empty()
@@ -175,7 +212,11 @@ pub fn cmd_groebner(
             }
             mods.push(Poly::from_terms(&ring, terms));
         }
-        let r = groebner_in(&ring, &mods, &opts);
+        let r = if f4 && field < 1 << 31 {
+            Ok((isoray_algebra::f4::f4_modp(&ring, &mods), Default::default()))
+        } else {
+            groebner_in(&ring, &mods, &opts)
+        };
         done();
         let (basis, st) = r.map_err(fail)?;
         (basis.iter().map(|p| p.display(&ring)).collect(), st)

@@ -259,28 +259,7 @@ enum Command {
         input: SceneArgs,
     },
     /// Compute a reduced Gröbner basis; prints one polynomial per line.
-    Groebner {
-        /// Variables, largest first: x,y,z.
-        #[arg(long, value_delimiter = ',', required = true)]
-        vars: Vec<String>,
-        /// Monomial order: lex, deglex, grevlex, weighted:W1,W2,... or block:N1,N2,...
-        #[arg(long, default_value = "grevlex")]
-        order: String,
-        /// 0 for the rationals, or a prime p for GF(p).
-        #[arg(long, default_value_t = 0)]
-        field: u64,
-        /// Print statistics to stderr.
-        #[arg(long)]
-        stats: bool,
-        /// Read polynomials from FILE, one per line (`-` for stdin).
-        #[arg(long, value_name = "FILE")]
-        input: Option<String>,
-        /// Stop with an error after this many seconds.
-        #[arg(long, value_name = "SECONDS")]
-        timeout: Option<f64>,
-        /// The generators (put `--` before them if one starts with `-`).
-        polys: Vec<String>,
-    },
+    Groebner(algebra_cmd::GroebnerArgs),
     /// Find the implicit equation of a rational parametrization.
     Implicitize {
         /// x(s, t)
@@ -662,15 +641,7 @@ fn main() -> ExitCode {
             quiet,
         }),
         Command::Eval { input } => cmd_eval(&input),
-        Command::Groebner {
-            vars,
-            order,
-            field,
-            stats,
-            input,
-            timeout,
-            polys,
-        } => algebra_cmd::cmd_groebner(&vars, &order, field, stats, input.as_deref(), timeout, &polys),
+        Command::Groebner(args) => algebra_cmd::cmd_groebner(&args),
         Command::Implicitize {
             x,
             y,
