@@ -7,31 +7,74 @@
 //! M, F and B_k forms), as in [`crate::groebner`].
 //!
 //! Monomials live in a hash table and rows refer to them by index, so the
-//! matrix's columns are sorted once per round; coefficients are `u32`
-//! residues with arithmetic in `u64`.
+//! matrix's columns are sorted once per round and a row is a list of column
+//! numbers and `u32` residues. The accumulator keeps residues below p² and
+//! reduces them modulo p only when it reaches their column (delayed
+//! reduction); a divisibility mask per monomial screens the search for
+//! reducers.
 //!
-//! This is the first stage of issue 18 (the engine over GF(p); multi-modular
-//! lifting over Q and the trace come next). It returns the reduced basis,
-//! monic, by increasing leading monomial, as [`crate::groebner_in`] does.
+//! A run can record its *trace* (Traverso's Gröbner trace carried over to
+//! F4): per matrix, which rows were worth reducing (those that gave new
+//! elements); replaying it modulo another prime builds only those rows, and
+//! checks that the same leading monomials come out. The multi-modular
+//! method over Q ([`crate::modular`]) learns it on its first prime.
+//!
+//! ```
+//! use isoray_algebra::{f4::f4_modp, parse_poly, Fp, GroebnerOptions, MonomialOrder, Poly, Ring};
+//!
+//! let ring = Ring::new(&["x", "y"], MonomialOrder::DegRevLex);
+//! let modp = |s: &str| {
+//!     let f = parse_poly(&ring, s).unwrap();
+//!     let terms = f.terms().iter().map(|(m, c)| (m.clone(), Fp::from_rat(c, 101).unwrap())).collect();
+//!     Poly::from_terms(&ring, terms)
+//! };
+//! let (basis, _) = f4_modp(&ring, &[modp("x^2 + y^2 - 1"), modp("x - y")], &GroebnerOptions::default()).unwrap();
+//! let text: Vec<String> = basis.iter().map(|p| p.display(&ring)).collect();
+//! assert_eq!(text, ["x + 100*y", "y^2 + 50"]); // x = y, y² = 1/2 = −50 (mod 101)
+//! ```
 
 use std::cmp::Ordering;
-use std::collections::HashMap;
+use std::time::Instant;
+
+use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::coeff::Fp;
+use crate::groebner::{check_budget, GroebnerError, GroebnerOptions, Stats};
 use crate::monomial::Monomial;
 use crate::poly::{Poly, Ring};
 
-/// The monomials met so far, by index.
+/// No pivot in this column.
+const NONE: u32 = u32::MAX;
+
+/// A divisibility mask: for each variable (up to 64 / n bits each) whether
+/// its exponent reaches 1, 2, 4, 8. If a divides b, mask(a) ⊆ mask(b).
+fn mask(m: &Monomial) -> u64 {
+    let n = m.nvars().max(1);
+    let bits = (64 / n).clamp(1, 4);
+    let mut k = 0u64;
+    for (i, &e) in m.exps().iter().enumerate() {
+        for b in 0..bits {
+            if e >= 1 << b {
+                k |= 1 << ((i * bits + b) % 64);
+            }
+        }
+    }
+    k
+}
+
+/// The monomials met so far, by index, with their masks.
 struct Table {
     monos: Vec<Monomial>,
-    index: HashMap<Monomial, u32>,
+    masks: Vec<u64>,
+    index: FxHashMap<Monomial, u32>,
 }
 
 impl Table {
     fn new() -> Table {
         Table {
             monos: Vec::new(),
-            index: HashMap::new(),
+            masks: Vec::new(),
+            index: FxHashMap::default(),
         }
     }
     fn id(&mut self, m: Monomial) -> u32 {
@@ -39,6 +82,7 @@ impl Table {
             return k;
         }
         let k = self.monos.len() as u32;
+        self.masks.push(mask(&m));
         self.monos.push(m.clone());
         self.index.insert(m, k);
         k
@@ -50,6 +94,12 @@ impl Table {
 #[derive(Clone, Debug)]
 struct Row {
     mons: Vec<u32>,
+    coefs: Vec<u32>,
+}
+
+/// A row of a matrix: increasing column numbers (decreasing monomials).
+struct MatRow {
+    cols: Vec<u32>,
     coefs: Vec<u32>,
 }
 
@@ -74,96 +124,172 @@ fn inv_mod(a: u64, p: u64) -> u64 {
     acc
 }
 
+/// What an F4 run learned, to be replayed modulo other primes: which inputs
+/// gave elements, and per matrix the rows (element, multiplier) worth
+/// building and the leading monomials they gave.
+#[derive(Debug, Clone, Default)]
+pub struct F4Trace {
+    inputs: Vec<(usize, Monomial)>,
+    rounds: Vec<RoundTrace>,
+}
+
+#[derive(Debug, Clone, Default)]
+struct RoundTrace {
+    rows: Vec<(usize, Monomial)>,
+    leads: Vec<Monomial>,
+}
+
+impl F4Trace {
+    /// Matrices recorded.
+    pub fn rounds(&self) -> usize {
+        self.rounds.len()
+    }
+}
+
+/// A replay met other leading monomials than its trace (an unlucky prime,
+/// or a prime where a coefficient the trace relies on vanishes).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TraceMismatch;
+
 /// The state of an F4 run.
 struct F4<'r> {
     ring: &'r Ring,
     p: u64,
+    opts: &'r GroebnerOptions,
+    start: Instant,
+    stats: Stats,
     table: Table,
     basis: Vec<Row>,
-    /// Leading monomial of each basis element.
+    /// Leading monomial of each basis element, and its mask.
     lead: Vec<Monomial>,
+    lead_mask: Vec<u64>,
     /// Whether an element is still in the basis (not made redundant).
     alive: Vec<bool>,
     pairs: Vec<Pair>,
 }
 
 impl<'r> F4<'r> {
+    fn new(ring: &'r Ring, p: u64, opts: &'r GroebnerOptions) -> F4<'r> {
+        F4 {
+            ring,
+            p,
+            opts,
+            start: Instant::now(),
+            stats: Stats::default(),
+            table: Table::new(),
+            basis: Vec::new(),
+            lead: Vec::new(),
+            lead_mask: Vec::new(),
+            alive: Vec::new(),
+            pairs: Vec::new(),
+        }
+    }
+
     fn cmp(&self, a: u32, b: u32) -> Ordering {
         self.ring
             .cmp(&self.table.monos[a as usize], &self.table.monos[b as usize])
     }
 
+    fn check(&self) -> Result<(), GroebnerError> {
+        check_budget(&self.opts.budget, self.start, &self.stats)
+    }
+
     /// Row of m·g for basis element g.
     fn multiple(&mut self, m: &Monomial, g: usize) -> Row {
-        let mons = self.basis[g]
-            .mons
-            .clone()
-            .into_iter()
-            .map(|k| {
-                let prod = self.table.monos[k as usize].mul(m);
-                self.table.id(prod)
-            })
-            .collect();
+        if m.is_one() {
+            return self.basis[g].clone();
+        }
+        let mut mons = Vec::with_capacity(self.basis[g].mons.len());
+        for k in 0..self.basis[g].mons.len() {
+            let prod = self.table.monos[self.basis[g].mons[k] as usize].mul(m);
+            mons.push(self.table.id(prod));
+        }
         Row {
             mons,
             coefs: self.basis[g].coefs.clone(),
         }
     }
 
-    /// Adds `row` (monic, nonzero) to the basis and updates the pairs by
-    /// Gebauer and Möller's criteria.
-    fn insert(&mut self, row: Row) {
-        let h = self.basis.len();
-        let lh = self.table.monos[row.mons[0] as usize].clone();
-        // New pairs (h, g), pruned by the chain criterion among themselves
-        // (keep a pair unless another new pair's lcm properly divides its
-        // lcm), then by the product criterion.
+    /// The new pairs of element h with the alive elements, pruned by the
+    /// chain criterion (M: another new pair's lcm properly divides this
+    /// one's; F: one pair per lcm) and the product criterion; the old pairs
+    /// that lm(h) makes redundant (B_k) are dropped.
+    fn update_pairs(&mut self, h: usize, lh: &Monomial) {
         let cand: Vec<(usize, Monomial)> = (0..h)
             .filter(|&g| self.alive[g])
-            .map(|g| (g, self.lead[g].lcm(&lh)))
+            .map(|g| (g, self.lead[g].lcm(lh)))
             .collect();
-        let mut keep: Vec<(usize, Monomial)> = Vec::new();
+        self.stats.pairs_created += cand.len() as u64;
+        let mut kept = 0;
         for (k, (g, l)) in cand.iter().enumerate() {
-            let coprime = self.lead[*g].coprime(&lh);
             let dominated = cand
                 .iter()
                 .enumerate()
                 .any(|(k2, (_, l2))| k2 != k && l2.divides(l) && (l2 != l || k2 < k));
-            if coprime || !dominated {
-                keep.push((*g, l.clone()));
+            let coprime = self.lead[*g].coprime(lh);
+            // A pair whose lcm equals a coprime pair's lcm goes with it (F).
+            let same_as_coprime = !coprime && cand.iter().any(|(g2, l2)| l2 == l && self.lead[*g2].coprime(lh));
+            if coprime {
+                self.stats.removed_product += 1;
+            } else if dominated || same_as_coprime {
+                self.stats.removed_chain += 1;
+            } else {
+                self.pairs.push(Pair {
+                    i: *g,
+                    j: h,
+                    lcm: l.clone(),
+                });
+                kept += 1;
             }
         }
-        let new_pairs: Vec<Pair> = keep
-            .into_iter()
-            .filter(|(g, _)| !self.lead[*g].coprime(&lh))
-            .map(|(g, l)| Pair { i: g, j: h, lcm: l })
-            .collect();
-        // Old pairs (i, j) go when lm(h) divides their lcm strictly inside
-        // (B_k: lcm(i, h) and lcm(j, h) both differ from lcm(i, j)).
         let lead = &self.lead;
-        self.pairs
-            .retain(|q| !(lh.divides(&q.lcm) && lead[q.i].lcm(&lh) != q.lcm && lead[q.j].lcm(&lh) != q.lcm));
-        self.pairs.extend(new_pairs);
-        // Elements whose leading monomial lm(h) divides are redundant.
+        let before = self.pairs.len() - kept;
+        let mut k = 0;
+        let mut removed = 0;
+        self.pairs.retain(|q| {
+            k += 1;
+            let drop = k <= before && lh.divides(&q.lcm) && lead[q.i].lcm(lh) != q.lcm && lead[q.j].lcm(lh) != q.lcm;
+            removed += u64::from(drop);
+            !drop
+        });
+        self.stats.removed_chain += removed;
+    }
+
+    /// Adds `row` (monic, nonzero, its leading monomial divisible by no
+    /// alive element's) to the basis, with its pairs if `pairs`; elements
+    /// whose leading monomial it divides are no longer alive (their pairs
+    /// with it are made first, as Gebauer and Möller's UPDATE does).
+    fn insert(&mut self, row: Row, pairs: bool) {
+        let h = self.basis.len();
+        let lh = self.table.monos[row.mons[0] as usize].clone();
+        let mh = self.table.masks[row.mons[0] as usize];
+        if pairs {
+            self.update_pairs(h, &lh);
+        }
         for g in 0..h {
-            if self.alive[g] && lh.divides(&self.lead[g]) {
+            if self.alive[g] && mh & !self.lead_mask[g] == 0 && lh.divides(&self.lead[g]) {
                 self.alive[g] = false;
             }
         }
         self.basis.push(row);
         self.lead.push(lh);
+        self.lead_mask.push(mh);
         self.alive.push(true);
     }
 
-    /// Symbolic preprocessing: the rows `rows` and, for every monomial in
-    /// them divisible by a leading monomial of the basis, a reducer row
-    /// (a multiple of a basis element with that leading monomial); returns
-    /// the reducers.
-    /// With `leads` false the rows' own leading monomials get no reducer
-    /// (they are the matrix's new pivots or known to be irreducible).
+    /// An alive element whose leading monomial divides monomial `m`.
+    fn divisor(&self, m: u32) -> Option<usize> {
+        let mm = self.table.masks[m as usize];
+        let mono = &self.table.monos[m as usize];
+        (0..self.basis.len()).find(|&g| self.alive[g] && self.lead_mask[g] & !mm == 0 && self.lead[g].divides(mono))
+    }
+
+    /// Symbolic preprocessing: for every monomial of `rows` (with `leads`
+    /// false, but their leading ones) and of the reducers found, a reducer
+    /// row (a multiple of an alive element with that leading monomial).
     fn preprocess(&mut self, rows: &[Row], leads: bool) -> Vec<Row> {
         let skip = usize::from(!leads);
-        let mut done: std::collections::HashSet<u32> = std::collections::HashSet::new();
+        let mut done: FxHashSet<u32> = FxHashSet::default();
         if !leads {
             done.extend(rows.iter().map(|r| r.mons[0]));
         }
@@ -173,11 +299,8 @@ impl<'r> F4<'r> {
             if !done.insert(m) {
                 continue;
             }
-            let mono = self.table.monos[m as usize].clone();
-            // The first alive element whose leading monomial divides m.
-            let found = (0..self.basis.len()).find(|&g| self.alive[g] && self.lead[g].divides(&mono));
-            if let Some(g) = found {
-                let q = self.lead[g].quotient(&mono).expect("divides");
+            if let Some(g) = self.divisor(m) {
+                let q = self.lead[g].quotient(&self.table.monos[m as usize]).expect("divides");
                 let r = self.multiple(&q, g);
                 todo.extend(r.mons[1..].iter().copied());
                 reducers.push(r);
@@ -186,222 +309,437 @@ impl<'r> F4<'r> {
         reducers
     }
 
-    /// Reduces `rows` by the pivots (`pivots[c]`: the row whose leading
-    /// monomial is column c) and by each other (echelon form): returns the
-    /// nonzero results, monic, each with a leading monomial no pivot has.
-    /// Columns are the table indices in `order` (descending monomials).
-    fn reduce(&self, order: &[u32], pivots: &mut HashMap<u32, Row>, rows: Vec<Row>) -> Vec<Row> {
-        let p = self.p;
-        let col_of: HashMap<u32, usize> = order.iter().enumerate().map(|(c, &m)| (m, c)).collect();
-        let mut acc = vec![0u64; order.len()];
-        let mut out = Vec::new();
-        for row in rows {
-            for (&m, &c) in row.mons.iter().zip(&row.coefs) {
-                acc[col_of[&m]] = c as u64;
+    /// The columns of `rows` (all their monomials) in descending order, and
+    /// the column of each table index (`NONE` for monomials not in them).
+    fn columns<'a>(&self, rows: impl Iterator<Item = &'a Row>) -> (Vec<u32>, Vec<u32>) {
+        let mut col_of = vec![NONE; self.table.monos.len()];
+        let mut cols = Vec::new();
+        for r in rows {
+            for &m in &r.mons {
+                if col_of[m as usize] == NONE {
+                    col_of[m as usize] = 0;
+                    cols.push(m);
+                }
             }
-            let first = col_of[&row.mons[0]];
-            let mut lead: Option<usize> = None;
-            for c in first..order.len() {
-                let v = acc[c] % p;
-                acc[c] = v;
-                if v == 0 {
+        }
+        cols.sort_unstable_by(|&a, &b| self.cmp(b, a));
+        for (c, &m) in cols.iter().enumerate() {
+            col_of[m as usize] = c as u32;
+        }
+        (cols, col_of)
+    }
+
+    /// `row` in column numbers, made monic.
+    fn to_matrix(&self, row: Row, col_of: &[u32]) -> MatRow {
+        let cols = row.mons.iter().map(|&m| col_of[m as usize]).collect();
+        let mut coefs = row.coefs;
+        if coefs[0] != 1 {
+            let inv = inv_mod(coefs[0] as u64, self.p);
+            for c in &mut coefs {
+                *c = (*c as u64 * inv % self.p) as u32;
+            }
+        }
+        MatRow { cols, coefs }
+    }
+
+    /// Makes `rows` pivots of their leading columns (where there is none yet).
+    fn install(&self, rows: Vec<Row>, col_of: &[u32], piv: &mut [u32], store: &mut Vec<MatRow>) {
+        for r in rows {
+            let m = self.to_matrix(r, col_of);
+            let c = m.cols[0] as usize;
+            if piv[c] == NONE {
+                piv[c] = store.len() as u32;
+                store.push(m);
+            }
+        }
+    }
+
+    /// Reduces `rows` by the pivots (`piv[c]`: the index in `store` of the
+    /// row whose leading column is c) with a dense accumulator. With
+    /// `keep_lead` false a nonzero result, monic, becomes the pivot of its
+    /// leading column (so later rows are reduced by it too) and is returned
+    /// (None for rows that reduce to zero); with `keep_lead` true the rows'
+    /// leading terms stay and only their tails are reduced (interreduction).
+    fn echelon(
+        &mut self,
+        ncols: usize,
+        piv: &mut [u32],
+        store: &mut Vec<MatRow>,
+        rows: Vec<MatRow>,
+        keep_lead: bool,
+    ) -> Result<Vec<Option<u32>>, GroebnerError> {
+        let p = self.p;
+        let p2 = p * p;
+        let mut acc = vec![0u64; ncols];
+        let mut out = Vec::with_capacity(rows.len());
+        for (n, row) in rows.into_iter().enumerate() {
+            if n % 64 == 63 {
+                self.check()?;
+            }
+            for (&c, &v) in row.cols.iter().zip(&row.coefs) {
+                acc[c as usize] = v as u64;
+            }
+            let first = row.cols[0] as usize;
+            let mut nz: Vec<u32> = Vec::new();
+            if keep_lead {
+                nz.push(first as u32);
+            }
+            for c in first + usize::from(keep_lead)..ncols {
+                let a = acc[c];
+                if a == 0 {
                     continue;
                 }
-                match pivots.get(&order[c]) {
-                    Some(piv) => {
-                        // acc −= v·piv (piv is monic: its leading term cancels).
-                        let f = p - v;
-                        for (&m, &pc) in piv.mons.iter().zip(&piv.coefs) {
-                            let k = col_of[&m];
-                            acc[k] = (acc[k] + f * pc as u64) % p;
-                        }
-                    }
-                    None => {
-                        if lead.is_none() {
-                            lead = Some(c);
-                        }
-                    }
+                let v = a % p;
+                if v == 0 {
+                    acc[c] = 0;
+                    continue;
                 }
+                let k = piv[c];
+                if k == NONE {
+                    acc[c] = v;
+                    nz.push(c as u32);
+                    continue;
+                }
+                // acc −= v·pivot (monic: its leading term cancels column c).
+                acc[c] = 0;
+                let f = p - v;
+                let pr = &store[k as usize];
+                for (&cc, &pc) in pr.cols[1..].iter().zip(&pr.coefs[1..]) {
+                    let x = acc[cc as usize] + f * pc as u64;
+                    acc[cc as usize] = if x >= p2 { x - p2 } else { x };
+                }
+                self.stats.reduction_steps += 1;
             }
-            if let Some(l) = lead {
-                let inv = inv_mod(acc[l], p);
-                let mut r = Row {
-                    mons: Vec::new(),
-                    coefs: Vec::new(),
+            if nz.is_empty() {
+                self.stats.zero_reductions += 1;
+                out.push(None);
+                continue;
+            }
+            let inv = if keep_lead { 1 } else { inv_mod(acc[nz[0] as usize], p) };
+            let coefs = nz
+                .iter()
+                .map(|&c| {
+                    let v = std::mem::take(&mut acc[c as usize]);
+                    (v * inv % p) as u32
+                })
+                .collect();
+            let lead = nz[0];
+            let k = store.len() as u32;
+            store.push(MatRow { cols: nz, coefs });
+            if !keep_lead {
+                piv[lead as usize] = k;
+            }
+            out.push(Some(k));
+        }
+        Ok(out)
+    }
+
+    /// One matrix: the pair rows `rows` (with the element and multiplier
+    /// each came from) and their reducers. Returns the new elements' rows,
+    /// and for each of `rows` whether it was needed (it became a pivot or
+    /// reduced to a new element).
+    fn matrix(&mut self, rows: Vec<Row>) -> Result<(Vec<Row>, Vec<bool>), GroebnerError> {
+        let reducers = self.preprocess(&rows, false);
+        let (order, col_of) = self.columns(rows.iter().chain(&reducers));
+        let mut piv = vec![NONE; order.len()];
+        let mut store: Vec<MatRow> = Vec::with_capacity(reducers.len() + rows.len());
+        self.install(reducers, &col_of, &mut piv, &mut store);
+        let mut needed = vec![false; rows.len()];
+        let mut todo = Vec::new();
+        let mut todo_of = Vec::new();
+        for (k, r) in rows.into_iter().enumerate() {
+            let m = self.to_matrix(r, &col_of);
+            let c = m.cols[0] as usize;
+            if piv[c] == NONE {
+                piv[c] = store.len() as u32;
+                store.push(m);
+                needed[k] = true;
+            } else {
+                todo.push(m);
+                todo_of.push(k);
+            }
+        }
+        let results = self.echelon(order.len(), &mut piv, &mut store, todo, false)?;
+        let mut new = Vec::new();
+        for (k, res) in todo_of.into_iter().zip(results) {
+            if let Some(s) = res {
+                needed[k] = true;
+                let m = &store[s as usize];
+                new.push(Row {
+                    mons: m.cols.iter().map(|&c| order[c as usize]).collect(),
+                    coefs: m.coefs.clone(),
+                });
+            }
+        }
+        Ok((new, needed))
+    }
+
+    /// The inputs, each reduced by the elements before it; returns which
+    /// inputs gave elements.
+    fn add_inputs(&mut self, rows: Vec<Row>, pairs: bool) -> Result<Vec<(usize, Monomial)>, GroebnerError> {
+        let mut gave = Vec::new();
+        for (k, row) in rows.into_iter().enumerate() {
+            let reducers = self.preprocess(std::slice::from_ref(&row), true);
+            let (order, col_of) = self.columns(std::iter::once(&row).chain(&reducers));
+            let mut piv = vec![NONE; order.len()];
+            let mut store = Vec::new();
+            self.install(reducers, &col_of, &mut piv, &mut store);
+            let row = MatRow {
+                cols: row.mons.iter().map(|&m| col_of[m as usize]).collect(),
+                coefs: row.coefs,
+            };
+            if let Some(Some(s)) = self.echelon(order.len(), &mut piv, &mut store, vec![row], false)?.pop() {
+                let m = &store[s as usize];
+                let r = Row {
+                    mons: m.cols.iter().map(|&c| order[c as usize]).collect(),
+                    coefs: m.coefs.clone(),
                 };
-                for (c, a) in acc.iter_mut().enumerate().skip(l) {
-                    if *a != 0 {
-                        r.mons.push(order[c]);
-                        r.coefs.push((*a * inv % p) as u32);
-                        *a = 0;
-                    }
-                }
-                pivots.insert(order[l], r.clone());
-                out.push(r);
+                gave.push((k, self.table.monos[r.mons[0] as usize].clone()));
+                self.insert(r, pairs);
             }
         }
-        out
+        Ok(gave)
     }
 
-    /// The full normal form of `row` by the basis, monic, or `None` if it is 0.
-    fn normal_form(&mut self, row: Row) -> Option<Row> {
-        let reducers = self.preprocess(std::slice::from_ref(&row), true);
-        let all: Vec<&Row> = std::iter::once(&row).chain(&reducers).collect();
-        let order = self.columns(&all);
-        let mut pivots = self.pivots(reducers);
-        self.reduce(&order, &mut pivots, vec![row]).pop()
-    }
-
-    /// The rows made monic, keyed by leading monomial (the first row with a
-    /// given leading monomial wins).
-    fn pivots(&self, rows: Vec<Row>) -> HashMap<u32, Row> {
-        let mut pivots = HashMap::new();
-        for r in rows {
-            let inv = inv_mod(r.coefs[0] as u64, self.p);
-            let coefs = r.coefs.iter().map(|&c| (c as u64 * inv % self.p) as u32).collect();
-            pivots.entry(r.mons[0]).or_insert(Row { mons: r.mons, coefs });
+    fn report(&self, done: u64) {
+        if let Some(p) = &self.opts.progress {
+            p.update(done, done + self.pairs.len() as u64);
         }
-        pivots
     }
 
-    /// The columns of `rows` (all their monomials), in descending order.
-    fn columns(&self, rows: &[&Row]) -> Vec<u32> {
-        let mut cols: Vec<u32> = rows.iter().flat_map(|r| r.mons.iter().copied()).collect();
-        cols.sort_unstable();
-        cols.dedup();
-        cols.sort_by(|&a, &b| self.cmp(b, a));
-        cols
-    }
-
-    fn run(&mut self) {
+    /// The main loop: pairs of lowest degree, a matrix each time; records
+    /// the trace into `trace` if given.
+    fn run(&mut self, mut trace: Option<&mut F4Trace>) -> Result<(), GroebnerError> {
+        let mut done = 0u64;
         while !self.pairs.is_empty() {
-            // The pairs of lowest degree.
+            self.check()?;
             let d = self.pairs.iter().map(|q| q.lcm.degree()).min().expect("pairs");
             let (now, later): (Vec<Pair>, Vec<Pair>) = self.pairs.drain(..).partition(|q| q.lcm.degree() == d);
             self.pairs = later;
-            // Both halves of each pair; one row per (multiplier, element).
-            let mut seen = std::collections::HashSet::new();
+            self.stats.pairs_reduced += now.len() as u64;
+            // Both halves of each pair; one row per (element, multiplier).
+            let mut seen = FxHashSet::default();
+            let mut made = Vec::new();
             let mut rows = Vec::new();
             for q in &now {
                 for g in [q.i, q.j] {
                     let m = self.lead[g].quotient(&q.lcm).expect("lcm");
                     if seen.insert((g, m.clone())) {
                         rows.push(self.multiple(&m, g));
+                        made.push((g, m));
                     }
                 }
             }
-            let reducers = self.preprocess(&rows, false);
-            let all: Vec<&Row> = rows.iter().chain(&reducers).collect();
-            let order = self.columns(&all);
-            // A pivot per leading column: reducers first, then pair rows.
-            let mut pivots: HashMap<u32, Row> = HashMap::new();
-            let mut rest = Vec::new();
-            for r in reducers.into_iter().chain(rows) {
-                if let std::collections::hash_map::Entry::Vacant(e) = pivots.entry(r.mons[0]) {
-                    let inv = inv_mod(r.coefs[0] as u64, self.p);
-                    let coefs = r.coefs.iter().map(|&c| (c as u64 * inv % self.p) as u32).collect();
-                    e.insert(Row { mons: r.mons, coefs });
-                } else {
-                    rest.push(r);
-                }
+            let (new, needed) = self.matrix(rows)?;
+            let mut round = RoundTrace::default();
+            if trace.is_some() {
+                round.rows = made
+                    .into_iter()
+                    .zip(needed)
+                    .filter(|(_, n)| *n)
+                    .map(|(r, _)| r)
+                    .collect();
             }
-            let new = self.reduce(&order, &mut pivots, rest);
             for r in new {
-                self.insert(r);
+                round.leads.push(self.table.monos[r.mons[0] as usize].clone());
+                self.insert(r, true);
             }
+            if let Some(t) = trace.as_deref_mut() {
+                t.rounds.push(round);
+            }
+            done += now.len() as u64;
+            self.report(done);
         }
+        Ok(())
     }
 
-    /// The reduced basis: the alive elements, each tail reduced by the others.
-    fn reduced(mut self) -> Vec<Row> {
-        let alive: Vec<usize> = (0..self.basis.len()).filter(|&g| self.alive[g]).collect();
-        let mut out = Vec::new();
-        for &g in &alive {
-            let row = self.basis[g].clone();
-            // Reducers for the tail (never g itself: its leading monomial is not in its tail).
-            if row.mons.len() == 1 {
-                out.push(row);
+    /// Replays `trace`'s matrices.
+    fn replay(&mut self, trace: &F4Trace) -> Result<Result<(), TraceMismatch>, GroebnerError> {
+        for (k, round) in trace.rounds.iter().enumerate() {
+            self.check()?;
+            let rows = round.rows.iter().map(|(g, m)| self.multiple(m, *g)).collect();
+            let (new, _) = self.matrix(rows)?;
+            if new.len() != round.leads.len() {
+                return Ok(Err(TraceMismatch));
+            }
+            for (r, l) in new.into_iter().zip(&round.leads) {
+                if self.table.monos[r.mons[0] as usize] != *l {
+                    return Ok(Err(TraceMismatch));
+                }
+                self.insert(r, false);
+            }
+            if let Some(p) = &self.opts.progress {
+                p.update(k as u64 + 1, trace.rounds.len() as u64);
+            }
+        }
+        Ok(Ok(()))
+    }
+
+    /// The reduced basis: the alive elements, each tail reduced by the
+    /// others in one matrix; monic, by increasing leading monomial.
+    fn reduced(&mut self) -> Result<Vec<Poly<Fp>>, GroebnerError> {
+        let alive: Vec<Row> = (0..self.basis.len())
+            .filter(|&g| self.alive[g])
+            .map(|g| self.basis[g].clone())
+            .collect();
+        let reducers = self.preprocess(&alive, false);
+        let (order, col_of) = self.columns(alive.iter().chain(&reducers));
+        let mut piv = vec![NONE; order.len()];
+        let mut store = Vec::new();
+        let mut rows = Vec::new();
+        for r in alive {
+            let m = self.to_matrix(r, &col_of);
+            piv[m.cols[0] as usize] = store.len() as u32;
+            rows.push(MatRow {
+                cols: m.cols.clone(),
+                coefs: m.coefs.clone(),
+            });
+            store.push(m);
+        }
+        self.install(reducers, &col_of, &mut piv, &mut store);
+        let done = self.echelon(order.len(), &mut piv, &mut store, rows, true)?;
+        let p = self.p;
+        let mut out: Vec<Poly<Fp>> = done
+            .into_iter()
+            .map(|s| {
+                let m = &store[s.expect("a basis element keeps its leading term") as usize];
+                Poly::from_sorted(
+                    m.cols
+                        .iter()
+                        .zip(&m.coefs)
+                        .map(|(&c, &v)| {
+                            (
+                                self.table.monos[order[c as usize] as usize].clone(),
+                                Fp::new(v as i64, p),
+                            )
+                        })
+                        .collect(),
+                )
+            })
+            .collect();
+        out.sort_by(|a, b| self.ring.cmp(a.lm().expect("nonzero"), b.lm().expect("nonzero")));
+        Ok(out)
+    }
+
+    /// The inputs as rows, by increasing leading monomial.
+    fn input_rows(&mut self, polys: &[Poly<Fp>]) -> Vec<Row> {
+        let mut rows: Vec<Row> = Vec::new();
+        for f in polys {
+            let mut terms: Vec<(Monomial, u32)> = f
+                .terms()
+                .iter()
+                .filter(|(_, c)| c.value() != 0)
+                .map(|(m, c)| (m.clone(), c.value() as u32))
+                .collect();
+            if terms.is_empty() {
                 continue;
             }
-            let reducers = self.preprocess(std::slice::from_ref(&row), false);
-            let all: Vec<&Row> = std::iter::once(&row).chain(&reducers).collect();
-            let order = self.columns(&all);
-            let mut pivots = self.pivots(reducers);
-            let mut reduced = self.reduce(&order, &mut pivots, vec![row]);
-            out.push(reduced.pop().expect("a basis element does not reduce to zero"));
+            terms.sort_by(|a, b| self.ring.cmp(&b.0, &a.0));
+            let mons = terms.iter().map(|(m, _)| self.table.id(m.clone())).collect();
+            rows.push(Row {
+                mons,
+                coefs: terms.iter().map(|(_, c)| *c).collect(),
+            });
         }
-        out
+        rows.sort_by(|a, b| self.cmp(a.mons[0], b.mons[0]));
+        rows
+    }
+
+    fn finish(&mut self) -> Result<(Vec<Poly<Fp>>, Stats), GroebnerError> {
+        if let Some(p) = &self.opts.progress {
+            p.stage("f4: interreduction");
+        }
+        let basis = self.reduced()?;
+        self.stats.basis_size = basis.len();
+        self.stats.time = self.start.elapsed();
+        Ok((basis, self.stats))
     }
 }
 
-/// The reduced Gröbner basis of `polys` over GF(p) (p < 2³¹) by F4: monic
-/// elements by increasing leading monomial.
-pub fn f4_modp(ring: &Ring, polys: &[Poly<Fp>]) -> Vec<Poly<Fp>> {
-    let Some(p) = polys.iter().flat_map(|f| f.terms()).map(|(_, c)| c.modulus()).next() else {
-        return Vec::new();
-    };
+/// A reduced basis over GF(p) and the counters of its computation.
+pub type FpBasis = (Vec<Poly<Fp>>, Stats);
+
+/// The modulus of `polys`' coefficients (None when they are all zero).
+fn modulus(polys: &[Poly<Fp>]) -> Option<u64> {
+    let p = polys.iter().flat_map(|f| f.terms()).map(|(_, c)| c.modulus()).next()?;
     assert!(p < 1 << 31, "F4 here works modulo primes below 2³¹");
-    let mut f4 = F4 {
-        ring,
-        p,
-        table: Table::new(),
-        basis: Vec::new(),
-        lead: Vec::new(),
-        alive: Vec::new(),
-        pairs: Vec::new(),
+    Some(p)
+}
+
+/// The reduced Gröbner basis of `polys` over GF(p) (p < 2³¹) by F4: monic
+/// elements by increasing leading monomial, with the run's counters
+/// (`pairs_reduced` counts pairs, `reduction_steps` row eliminations,
+/// `zero_reductions` rows that reduced to zero). The budget, interrupt and
+/// progress of `opts` apply (stages `f4` and `f4: interreduction`).
+pub fn f4_modp(
+    ring: &Ring,
+    polys: &[Poly<Fp>],
+    opts: &GroebnerOptions,
+) -> Result<(Vec<Poly<Fp>>, Stats), GroebnerError> {
+    f4_learn(ring, polys, opts, None)
+}
+
+/// [`f4_modp`], recording the run's trace into `trace`.
+pub fn f4_learn(
+    ring: &Ring,
+    polys: &[Poly<Fp>],
+    opts: &GroebnerOptions,
+    trace: Option<&mut F4Trace>,
+) -> Result<(Vec<Poly<Fp>>, Stats), GroebnerError> {
+    let Some(p) = modulus(polys) else {
+        return Ok((Vec::new(), Stats::default()));
     };
-    // The inputs, inter-reduced by one matrix so that they enter with
-    // distinct leading monomials.
-    let mut rows: Vec<Row> = Vec::new();
-    for f in polys {
-        let mut terms: Vec<(Monomial, u64)> = f
-            .terms()
-            .iter()
-            .map(|(m, c)| (m.clone(), c.value()))
-            .filter(|(_, c)| *c != 0)
-            .collect();
-        if terms.is_empty() {
-            continue;
-        }
-        terms.sort_by(|a, b| ring.cmp(&b.0, &a.0));
-        let mons = terms.iter().map(|(m, _)| f4.table.id(m.clone())).collect();
-        rows.push(Row {
-            mons,
-            coefs: terms.iter().map(|(_, c)| *c as u32).collect(),
-        });
+    let mut f4 = F4::new(ring, p, opts);
+    if let Some(pr) = &opts.progress {
+        pr.stage("f4");
     }
-    // The inputs by increasing leading monomial, each reduced by the basis
-    // so far, so that no element's leading monomial divides another's.
-    rows.sort_by(|a, b| f4.cmp(a.mons[0], b.mons[0]));
-    for row in rows {
-        if let Some(r) = f4.normal_form(row) {
-            f4.insert(r);
+    let rows = f4.input_rows(polys);
+    let inputs = f4.add_inputs(rows, true)?;
+    match trace {
+        Some(t) => {
+            t.inputs = inputs;
+            t.rounds.clear();
+            f4.run(Some(t))?;
         }
+        None => f4.run(None)?,
     }
-    f4.run();
-    let ring_p = p;
-    let table_monos = f4.table.monos.clone();
-    let mut out: Vec<Poly<Fp>> = f4
-        .reduced()
-        .into_iter()
-        .map(|r| {
-            Poly::from_sorted(
-                r.mons
-                    .iter()
-                    .zip(&r.coefs)
-                    .map(|(&m, &c)| (table_monos[m as usize].clone(), Fp::new(c as i64, ring_p)))
-                    .collect(),
-            )
-        })
-        .collect();
-    out.sort_by(|a, b| ring.cmp(a.lm().expect("nonzero"), b.lm().expect("nonzero")));
-    out
+    f4.finish()
+}
+
+/// Replays `trace` (learned by [`f4_learn`] on the same inputs modulo another
+/// prime) modulo the prime of `polys`: the reduced basis, or
+/// `Ok(Err(TraceMismatch))` when another leading monomial comes out (the
+/// caller then runs [`f4_modp`] or drops the prime). Its result is a
+/// Gröbner basis only if the trace's run was one for this prime too, which
+/// the multi-modular method's verification settles.
+pub fn f4_replay(
+    ring: &Ring,
+    polys: &[Poly<Fp>],
+    trace: &F4Trace,
+    opts: &GroebnerOptions,
+) -> Result<Result<FpBasis, TraceMismatch>, GroebnerError> {
+    let Some(p) = modulus(polys) else {
+        return Ok(Err(TraceMismatch));
+    };
+    let mut f4 = F4::new(ring, p, opts);
+    if let Some(pr) = &opts.progress {
+        pr.stage("f4 replay");
+    }
+    let rows = f4.input_rows(polys);
+    let inputs = f4.add_inputs(rows, false)?;
+    if inputs != trace.inputs {
+        return Ok(Err(TraceMismatch));
+    }
+    if let Err(e) = f4.replay(trace)? {
+        return Ok(Err(e));
+    }
+    f4.finish().map(Ok)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::groebner::{groebner_in, GroebnerOptions};
+    use crate::groebner::groebner_in;
     use crate::monomial::MonomialOrder;
 
     fn modp(ring: &Ring, polys: &[Poly<crate::coeff::Rat>], p: u64) -> Vec<Poly<Fp>> {
@@ -440,7 +778,7 @@ mod tests {
         for (ring, polys) in cases {
             let fs = modp(&ring, &polys, p);
             let want = groebner_in(&ring, &fs, &GroebnerOptions::default()).unwrap().0;
-            let have = f4_modp(&ring, &fs);
+            let have = f4_modp(&ring, &fs, &GroebnerOptions::default()).unwrap().0;
             let show = |b: &[Poly<Fp>]| b.iter().map(|f| f.display(&ring)).collect::<Vec<_>>();
             assert_eq!(show(&have), show(&want), "{:?}", ring.order());
         }
@@ -454,9 +792,9 @@ mod tests {
             ],
             p,
         );
-        let b = f4_modp(&r, &one);
+        let b = f4_modp(&r, &one, &GroebnerOptions::default()).unwrap().0;
         assert_eq!(b.len(), 1);
         assert!(b[0].is_constant());
-        assert!(f4_modp(&r, &[]).is_empty());
+        assert!(f4_modp(&r, &[], &GroebnerOptions::default()).unwrap().0.is_empty());
     }
 }

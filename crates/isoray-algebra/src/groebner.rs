@@ -292,6 +292,37 @@ pub fn groebner_fraction_free(
     })
 }
 
+/// Stops a computation that began at `start` when `budget` is spent
+/// (time, steps, interrupt), with the work `stats` done until then.
+pub(crate) fn check_budget(b: &Budget, start: Instant, stats: &Stats) -> Result<(), GroebnerError> {
+    let snapshot = || Stats {
+        time: start.elapsed(),
+        ..*stats
+    };
+    if let Some(t) = b.time {
+        if start.elapsed() > t {
+            return Err(GroebnerError::Timeout {
+                limit: t.as_secs_f64(),
+                stats: snapshot(),
+            });
+        }
+    }
+    if let Some(n) = b.steps {
+        if stats.reduction_steps > n {
+            return Err(GroebnerError::WorkLimit {
+                limit: n,
+                stats: snapshot(),
+            });
+        }
+    }
+    if let Some(token) = &b.interrupt {
+        if token.is_cancelled() {
+            return Err(GroebnerError::Interrupted { stats: snapshot() });
+        }
+    }
+    Ok(())
+}
+
 /// The reduced Gröbner basis over any [`Domain`] (Z fraction-free, Q, GF(p)):
 /// elements normalised by [`Domain::normalize`].
 pub fn groebner_in<D: Domain>(
@@ -497,35 +528,7 @@ impl<'a, D: Domain> State<'a, D> {
     }
 
     fn check(&mut self) -> Result<(), GroebnerError> {
-        let b = &self.opts.budget;
-        let snapshot = |s: &Stats, start: Instant| Stats {
-            time: start.elapsed(),
-            ..*s
-        };
-        if let Some(t) = b.time {
-            if self.start.elapsed() > t {
-                return Err(GroebnerError::Timeout {
-                    limit: t.as_secs_f64(),
-                    stats: snapshot(&self.stats, self.start),
-                });
-            }
-        }
-        if let Some(n) = b.steps {
-            if self.stats.reduction_steps > n {
-                return Err(GroebnerError::WorkLimit {
-                    limit: n,
-                    stats: snapshot(&self.stats, self.start),
-                });
-            }
-        }
-        if let Some(token) = &b.interrupt {
-            if token.is_cancelled() {
-                return Err(GroebnerError::Interrupted {
-                    stats: snapshot(&self.stats, self.start),
-                });
-            }
-        }
-        Ok(())
+        check_budget(&self.opts.budget, self.start, &self.stats)
     }
 
     fn lm(&self, k: usize) -> &Monomial {

@@ -213,7 +213,7 @@ pub fn cmd_groebner(args: &GroebnerArgs) -> Result<(), Failure> {
             mods.push(Poly::from_terms(&ring, terms));
         }
         let r = if f4 && field < 1 << 31 {
-            Ok((isoray_algebra::f4::f4_modp(&ring, &mods), Default::default()))
+            isoray_algebra::f4::f4_modp(&ring, &mods, &opts)
         } else {
             groebner_in(&ring, &mods, &opts)
         };
