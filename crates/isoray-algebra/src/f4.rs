@@ -34,9 +34,10 @@
 //! ```
 
 use std::cmp::Ordering;
+use std::rc::Rc;
 use std::time::Instant;
 
-use rustc_hash::{FxHashMap, FxHashSet};
+use rustc_hash::FxHashSet;
 
 use crate::coeff::Fp;
 use crate::groebner::{check_budget, GroebnerError, GroebnerOptions, Stats};
@@ -48,7 +49,7 @@ const NONE: u32 = u32::MAX;
 
 /// A divisibility mask: for each variable (up to 64 / n bits each) whether
 /// its exponent reaches 1, 2, 4, 8. If a divides b, mask(a) ⊆ mask(b).
-fn mask(m: &Monomial) -> u64 {
+fn mask_of(m: &Monomial) -> u64 {
     let n = m.nvars().max(1);
     let bits = (64 / n).clamp(1, 4);
     let mut k = 0u64;
@@ -62,30 +63,106 @@ fn mask(m: &Monomial) -> u64 {
     k
 }
 
-/// The monomials met so far, by index, with their masks.
+/// The monomials met so far, by index: their exponents (flat, `n` per
+/// monomial, for hashing and products without allocation), masks, and the
+/// [`Monomial`] (for the order and the output). An open-addressing hash
+/// table maps exponents to indices.
 struct Table {
-    monos: Vec<Monomial>,
+    n: usize,
+    exps: Vec<u16>,
+    hashes: Vec<u64>,
     masks: Vec<u64>,
-    index: FxHashMap<Monomial, u32>,
+    monos: Vec<Monomial>,
+    /// Index + 1 of the monomial in each slot (0: empty); a power of two long.
+    slots: Vec<u32>,
+    /// Scratch exponents of a product.
+    scratch: Vec<u16>,
+}
+
+fn hash_exps(e: &[u16]) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for &x in e {
+        h = (h ^ x as u64).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h ^ (h >> 29)
 }
 
 impl Table {
-    fn new() -> Table {
+    fn new(n: usize) -> Table {
         Table {
-            monos: Vec::new(),
+            n,
+            exps: Vec::new(),
+            hashes: Vec::new(),
             masks: Vec::new(),
-            index: FxHashMap::default(),
+            monos: Vec::new(),
+            slots: vec![0; 1024],
+            scratch: vec![0; n],
         }
     }
-    fn id(&mut self, m: Monomial) -> u32 {
-        if let Some(&k) = self.index.get(&m) {
-            return k;
+
+    fn len(&self) -> usize {
+        self.monos.len()
+    }
+
+    fn exps_of(&self, k: u32) -> &[u16] {
+        &self.exps[k as usize * self.n..(k as usize + 1) * self.n]
+    }
+
+    /// The index of the exponents in `self.scratch`, added if new.
+    fn id_of_scratch(&mut self) -> u32 {
+        let h = hash_exps(&self.scratch);
+        let mask = self.slots.len() - 1;
+        let mut i = h as usize & mask;
+        loop {
+            let s = self.slots[i];
+            if s == 0 {
+                break;
+            }
+            let k = s - 1;
+            if self.hashes[k as usize] == h && self.exps_of(k) == &self.scratch[..] {
+                return k;
+            }
+            i = (i + 1) & mask;
         }
         let k = self.monos.len() as u32;
-        self.masks.push(mask(&m));
-        self.monos.push(m.clone());
-        self.index.insert(m, k);
+        self.slots[i] = k + 1;
+        self.exps.extend_from_slice(&self.scratch);
+        self.hashes.push(h);
+        let m = Monomial::new(&self.scratch);
+        self.masks.push(mask_of(&m));
+        self.monos.push(m);
+        if 2 * self.monos.len() > self.slots.len() {
+            self.grow();
+        }
         k
+    }
+
+    fn grow(&mut self) {
+        let size = self.slots.len() * 2;
+        let mut slots = vec![0u32; size];
+        for (k, &h) in self.hashes.iter().enumerate() {
+            let mut i = h as usize & (size - 1);
+            while slots[i] != 0 {
+                i = (i + 1) & (size - 1);
+            }
+            slots[i] = k as u32 + 1;
+        }
+        self.slots = slots;
+    }
+
+    fn id(&mut self, m: &Monomial) -> u32 {
+        self.scratch.copy_from_slice(m.exps());
+        self.id_of_scratch()
+    }
+
+    /// The index of monomial k times `m`.
+    fn mul(&mut self, k: u32, m: &[u16]) -> u32 {
+        let base = k as usize * self.n;
+        let src = &self.exps[base..base + self.n];
+        for ((d, &a), &b) in self.scratch.iter_mut().zip(src).zip(m) {
+            *d = a.saturating_add(b);
+        }
+        self.id_of_scratch()
     }
 }
 
@@ -94,13 +171,15 @@ impl Table {
 #[derive(Clone, Debug)]
 struct Row {
     mons: Vec<u32>,
-    coefs: Vec<u32>,
+    /// Shared by the multiples of one element (reducers stream only their
+    /// column numbers from memory; the coefficients stay in cache).
+    coefs: Rc<[u32]>,
 }
 
 /// A row of a matrix: increasing column numbers (decreasing monomials).
 struct MatRow {
     cols: Vec<u32>,
-    coefs: Vec<u32>,
+    coefs: Rc<[u32]>,
 }
 
 /// A critical pair: basis elements i < j and the lcm of their leading monomials.
@@ -176,7 +255,7 @@ impl<'r> F4<'r> {
             opts,
             start: Instant::now(),
             stats: Stats::default(),
-            table: Table::new(),
+            table: Table::new(ring.nvars()),
             basis: Vec::new(),
             lead: Vec::new(),
             lead_mask: Vec::new(),
@@ -201,8 +280,7 @@ impl<'r> F4<'r> {
         }
         let mut mons = Vec::with_capacity(self.basis[g].mons.len());
         for k in 0..self.basis[g].mons.len() {
-            let prod = self.table.monos[self.basis[g].mons[k] as usize].mul(m);
-            mons.push(self.table.id(prod));
+            mons.push(self.table.mul(self.basis[g].mons[k], m.exps()));
         }
         Row {
             mons,
@@ -312,7 +390,7 @@ impl<'r> F4<'r> {
     /// The columns of `rows` (all their monomials) in descending order, and
     /// the column of each table index (`NONE` for monomials not in them).
     fn columns<'a>(&self, rows: impl Iterator<Item = &'a Row>) -> (Vec<u32>, Vec<u32>) {
-        let mut col_of = vec![NONE; self.table.monos.len()];
+        let mut col_of = vec![NONE; self.table.len()];
         let mut cols = Vec::new();
         for r in rows {
             for &m in &r.mons {
@@ -335,9 +413,7 @@ impl<'r> F4<'r> {
         let mut coefs = row.coefs;
         if coefs[0] != 1 {
             let inv = inv_mod(coefs[0] as u64, self.p);
-            for c in &mut coefs {
-                *c = (*c as u64 * inv % self.p) as u32;
-            }
+            coefs = coefs.iter().map(|&c| (c as u64 * inv % self.p) as u32).collect();
         }
         MatRow { cols, coefs }
     }
@@ -370,16 +446,19 @@ impl<'r> F4<'r> {
     ) -> Result<Vec<Option<u32>>, GroebnerError> {
         let p = self.p;
         let p2 = p * p;
+        // How many products (p − 1)² fit on top of a value below p² in a u64.
+        let headroom = (u64::MAX - p2) / ((p - 1) * (p - 1)).max(1);
         let mut acc = vec![0u64; ncols];
         let mut out = Vec::with_capacity(rows.len());
         for (n, row) in rows.into_iter().enumerate() {
             if n % 64 == 63 {
                 self.check()?;
             }
-            for (&c, &v) in row.cols.iter().zip(&row.coefs) {
+            for (&c, &v) in row.cols.iter().zip(row.coefs.iter()) {
                 acc[c as usize] = v as u64;
             }
             let first = row.cols[0] as usize;
+            let mut pending = 0u64;
             let mut nz: Vec<u32> = Vec::new();
             if keep_lead {
                 nz.push(first as u32);
@@ -404,9 +483,27 @@ impl<'r> F4<'r> {
                 acc[c] = 0;
                 let f = p - v;
                 let pr = &store[k as usize];
-                for (&cc, &pc) in pr.cols[1..].iter().zip(&pr.coefs[1..]) {
-                    let x = acc[cc as usize] + f * pc as u64;
-                    acc[cc as usize] = if x >= p2 { x - p2 } else { x };
+                let (cols, coefs) = (&pr.cols[1..], &pr.coefs[1..]);
+                if headroom >= 16 {
+                    // Small p: add products unreduced, and bring the row
+                    // below p before `headroom` of them could overflow.
+                    let acc = &mut acc[..];
+                    for (&cc, &pc) in cols.iter().zip(coefs) {
+                        // SAFETY: every column of a row is below ncols = acc.len().
+                        unsafe { *acc.get_unchecked_mut(cc as usize) += f * pc as u64 };
+                    }
+                    pending += 1;
+                    if pending + 1 >= headroom {
+                        for a in &mut acc[c + 1..] {
+                            *a %= p;
+                        }
+                        pending = 0;
+                    }
+                } else {
+                    for (&cc, &pc) in cols.iter().zip(coefs) {
+                        let x = acc[cc as usize] + f * pc as u64;
+                        acc[cc as usize] = if x >= p2 { x - p2 } else { x };
+                    }
                 }
                 self.stats.reduction_steps += 1;
             }
@@ -459,7 +556,22 @@ impl<'r> F4<'r> {
                 todo_of.push(k);
             }
         }
+        let t0 = Instant::now();
+        let (nred, ntodo, steps0) = (store.len(), todo.len(), self.stats.reduction_steps);
         let results = self.echelon(order.len(), &mut piv, &mut store, todo, false)?;
+        if std::env::var_os("F4_DEBUG").is_some() {
+            let nnz: usize = store[..nred].iter().map(|r| r.cols.len()).sum();
+            eprintln!(
+                "matrix {} pivots ({} nnz) + {} rows x {} cols: {} steps, {} new, {:.1} ms",
+                nred,
+                nnz,
+                ntodo,
+                order.len(),
+                self.stats.reduction_steps - steps0,
+                store.len() - nred,
+                t0.elapsed().as_secs_f64() * 1e3
+            );
+        }
         let mut new = Vec::new();
         for (k, res) in todo_of.into_iter().zip(results) {
             if let Some(s) = res {
@@ -606,7 +718,7 @@ impl<'r> F4<'r> {
                 Poly::from_sorted(
                     m.cols
                         .iter()
-                        .zip(&m.coefs)
+                        .zip(m.coefs.iter())
                         .map(|(&c, &v)| {
                             (
                                 self.table.monos[order[c as usize] as usize].clone(),
@@ -635,7 +747,7 @@ impl<'r> F4<'r> {
                 continue;
             }
             terms.sort_by(|a, b| self.ring.cmp(&b.0, &a.0));
-            let mons = terms.iter().map(|(m, _)| self.table.id(m.clone())).collect();
+            let mons = terms.iter().map(|(m, _)| self.table.id(m)).collect();
             rows.push(Row {
                 mons,
                 coefs: terms.iter().map(|(_, c)| *c).collect(),
