@@ -583,6 +583,10 @@ impl<'r> F4<'r> {
                 });
             }
         }
+        // Largest leading monomial first: a new element whose leading
+        // monomial another one's divides then leaves the basis when that
+        // one comes in (after their pair is made).
+        new.sort_by(|a, b| self.cmp(b.mons[0], a.mons[0]));
         Ok((new, needed))
     }
 
@@ -623,6 +627,7 @@ impl<'r> F4<'r> {
     /// the trace into `trace` if given.
     fn run(&mut self, mut trace: Option<&mut F4Trace>) -> Result<(), GroebnerError> {
         let mut done = 0u64;
+        self.report(done);
         while !self.pairs.is_empty() {
             self.check()?;
             let d = self.pairs.iter().map(|q| q.lcm.degree()).min().expect("pairs");
@@ -667,6 +672,9 @@ impl<'r> F4<'r> {
 
     /// Replays `trace`'s matrices.
     fn replay(&mut self, trace: &F4Trace) -> Result<Result<(), TraceMismatch>, GroebnerError> {
+        if let Some(p) = &self.opts.progress {
+            p.update(0, trace.rounds.len() as u64);
+        }
         for (k, round) in trace.rounds.iter().enumerate() {
             self.check()?;
             let rows = round.rows.iter().map(|(g, m)| self.multiple(m, *g)).collect();
@@ -758,10 +766,15 @@ impl<'r> F4<'r> {
     }
 
     fn finish(&mut self) -> Result<(Vec<Poly<Fp>>, Stats), GroebnerError> {
+        let n = self.alive.iter().filter(|a| **a).count() as u64;
         if let Some(p) = &self.opts.progress {
             p.stage("f4: interreduction");
+            p.update(0, n);
         }
         let basis = self.reduced()?;
+        if let Some(p) = &self.opts.progress {
+            p.update(n, n);
+        }
         self.stats.basis_size = basis.len();
         self.stats.time = self.start.elapsed();
         Ok((basis, self.stats))

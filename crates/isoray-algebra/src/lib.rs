@@ -26,6 +26,7 @@ pub mod ideal;
 pub mod implicit;
 pub mod interp;
 pub mod modular;
+pub mod modular_f4;
 pub mod monomial;
 pub mod parse;
 pub mod poly;
@@ -36,8 +37,11 @@ pub mod systems;
 pub(crate) mod testing;
 
 pub use coeff::{Coeff, Domain, Field, Fp, Int, Rat};
-pub use groebner::{groebner, Budget, GroebnerError, GroebnerOptions, GroebnerResult, Method, Stats, Strategy};
+pub use groebner::{
+    groebner, Algorithm, Budget, GroebnerError, GroebnerOptions, GroebnerResult, Method, Stats, Strategy,
+};
 pub use implicit::{implicitize_groebner, Implicit, ImplicitError};
+pub use modular_f4::Verify;
 pub use monomial::{Monomial, MonomialOrder};
 pub use parse::{parse_poly, parse_rational, ParseError, RatFunc};
 pub use poly::{divide, Poly, Ring};

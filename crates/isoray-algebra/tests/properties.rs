@@ -87,3 +87,32 @@ proptest! {
         prop_assert_eq!(&groebner(&r, &rev, &opts()).unwrap().basis, &g);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// F4 and Buchberger agree term for term modulo 32003 and over Q
+    /// (F4's multi-modular lift, either check), in every order.
+    #[test]
+    fn f4_agrees_with_buchberger(
+        gens in proptest::collection::vec(proptest::collection::vec(term(), 1..5), 1..5),
+        order in 0usize..4,
+    ) {
+        use isoray_algebra::{f4::f4_modp, groebner::groebner_in, Algorithm, Fp, Verify};
+        let r = ring(order);
+        let input: Vec<Poly<Rat>> = gens.iter().map(|t| poly(&r, t)).filter(|p| !p.is_zero()).collect();
+        prop_assume!(!input.is_empty());
+        let buchberger = GroebnerOptions { algorithm: Algorithm::Buchberger, ..opts() };
+        let Ok(want) = groebner(&r, &input, &buchberger) else { return Ok(()) };
+        for verify in [Verify::Probabilistic, Verify::Exact] {
+            let f4 = GroebnerOptions { verify, ..GroebnerOptions::default() };
+            prop_assert_eq!(&groebner(&r, &input, &f4).unwrap().basis, &want.basis);
+        }
+        let modp: Vec<Poly<Fp>> = input
+            .iter()
+            .map(|f| Poly::from_terms(&r, f.terms().iter().map(|(m, c)| (m.clone(), Fp::from_rat(c, 32003).unwrap())).filter(|(_, c)| c.value() != 0).collect()))
+            .collect();
+        let Ok((want_p, _)) = groebner_in(&r, &modp, &opts()) else { return Ok(()) };
+        prop_assert_eq!(f4_modp(&r, &modp, &GroebnerOptions::default()).unwrap().0, want_p);
+    }
+}

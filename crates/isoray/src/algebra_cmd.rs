@@ -9,8 +9,8 @@ use isoray_algebra::coeff::is_prime;
 use isoray_algebra::groebner::groebner_in;
 use isoray_algebra::implicit::implicitize_groebner;
 use isoray_algebra::{
-    groebner, parse_poly, Budget, Fp, GroebnerError, GroebnerOptions, ImplicitError, MonomialOrder, ParseError, Poly,
-    Rat, Ring,
+    groebner, parse_poly, Algorithm, Budget, Fp, GroebnerError, GroebnerOptions, ImplicitError, MonomialOrder,
+    ParseError, Poly, Rat, Ring, Verify,
 };
 
 use crate::Failure;
@@ -77,6 +77,11 @@ pub struct GroebnerArgs {
     /// reference engine).
     #[arg(long, default_value = "f4")]
     pub algorithm: String,
+    /// How F4's multi-modular basis over Q is checked: probabilistic
+    /// (against a full run modulo a random prime) or exact (every S-pair
+    /// and input reduces to zero over Q).
+    #[arg(long, default_value = "probabilistic")]
+    pub verify: String,
     /// The generators (put `--` before them if one starts with `-`).
     pub polys: Vec<String>,
 }
@@ -98,6 +103,11 @@ pub fn cmd_groebner(args: &GroebnerArgs) -> Result<(), Failure> {
                 "--algorithm: expected f4 or buchberger, found `{algorithm}`"
             )))
         }
+    };
+    let verify = match args.verify.as_str() {
+        "probabilistic" => Verify::Probabilistic,
+        "exact" => Verify::Exact,
+        v => return Err(bad(format!("--verify: expected probabilistic or exact, found `{v}`"))),
     };
     if vars.is_empty()
         || vars.iter().any(|v| {
@@ -179,6 +189,8 @@ pub fn cmd_groebner(args: &GroebnerArgs) -> Result<(), Failure> {
     let bar = JobBar::for_terminal();
     let opts = GroebnerOptions {
         progress: reporter(&bar),
+        algorithm: if f4 { Algorithm::F4 } else { Algorithm::Buchberger },
+        verify,
         ..options(timeout)?
     };
     let done = || {
