@@ -190,8 +190,8 @@ struct Pair {
     lcm: Monomial,
 }
 
-fn inv_mod(a: u64, p: u64) -> u64 {
-    // a^(p−2) mod p.
+/// a⁻¹ mod p for a prime p (a^(p−2)), p < 2³².
+pub(crate) fn inv_mod(a: u64, p: u64) -> u64 {
     let (mut base, mut e, mut acc) = (a % p, p - 2, 1u64);
     while e > 0 {
         if e & 1 == 1 {

@@ -172,6 +172,18 @@ pub struct Stats {
     pub time: Duration,
 }
 
+impl Stats {
+    /// Adds the work counters of `o` (pairs, reductions), not its basis size or time.
+    pub fn add_work(&mut self, o: &Stats) {
+        self.pairs_created += o.pairs_created;
+        self.removed_product += o.removed_product;
+        self.removed_chain += o.removed_chain;
+        self.pairs_reduced += o.pairs_reduced;
+        self.zero_reductions += o.zero_reductions;
+        self.reduction_steps += o.reduction_steps;
+    }
+}
+
 impl std::fmt::Display for Stats {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(

@@ -177,12 +177,7 @@ pub fn groebner_modular(
                 None => groebner_in(ring, &mods, opts)?,
             },
         };
-        stats.pairs_created += st.pairs_created;
-        stats.removed_chain += st.removed_chain;
-        stats.removed_product += st.removed_product;
-        stats.pairs_reduced += st.pairs_reduced;
-        stats.zero_reductions += st.zero_reductions;
-        stats.reduction_steps += st.reduction_steps;
+        stats.add_work(&st);
         let lms: Vec<&Monomial> = basis.iter().map(|g| g.lm().expect("nonzero")).collect();
         let k = match lifts.iter().position(|l| l.lms.iter().collect::<Vec<_>>() == lms) {
             Some(k) => {

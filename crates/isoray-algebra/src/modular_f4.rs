@@ -28,7 +28,7 @@ use num_integer::Integer;
 use num_traits::{One, ToPrimitive, Zero};
 
 use crate::coeff::{is_prime, to_zint, Fp, Int, Rat, ZInt};
-use crate::f4::{f4_learn, f4_modp, f4_replay, F4Trace};
+use crate::f4::{f4_learn, f4_modp, f4_replay, inv_mod, F4Trace};
 use crate::groebner::{check_groebner_basis, prefixed_progress, GroebnerError, GroebnerOptions, Stats};
 use crate::modular::rational_reconstruction;
 use crate::monomial::Monomial;
@@ -182,18 +182,6 @@ impl Lift {
     }
 }
 
-fn inv_mod(a: u64, p: u64) -> u64 {
-    let (mut base, mut e, mut acc) = (a % p, p - 2, 1u64);
-    while e > 0 {
-        if e & 1 == 1 {
-            acc = acc * base % p;
-        }
-        base = base * base % p;
-        e >>= 1;
-    }
-    acc
-}
-
 /// The candidate modulo q, if no denominator vanishes there.
 fn candidate_mod(ring: &Ring, basis: &[Poly<Rat>], q: u64) -> Option<Vec<Poly<Fp>>> {
     basis
@@ -210,15 +198,6 @@ fn candidate_mod(ring: &Ring, basis: &[Poly<Rat>], q: u64) -> Option<Vec<Poly<Fp
             ))
         })
         .collect()
-}
-
-fn add_stats(total: &mut Stats, s: &Stats) {
-    total.pairs_created += s.pairs_created;
-    total.removed_product += s.removed_product;
-    total.removed_chain += s.removed_chain;
-    total.pairs_reduced += s.pairs_reduced;
-    total.zero_reductions += s.zero_reductions;
-    total.reduction_steps += s.reduction_steps;
 }
 
 /// The reduced Gröbner basis over Q by multi-modular F4, checked as
@@ -270,18 +249,18 @@ pub fn groebner_f4_rational(
             None => {
                 let mut t = F4Trace::default();
                 let (b, st) = f4_learn(ring, &mods, &o, Some(&mut t))?;
-                add_stats(&mut stats, &st);
+                stats.add_work(&st);
                 trace = Some((t, b.iter().map(|g| g.lm().expect("nonzero").clone()).collect()));
                 b
             }
             Some((t, _)) => match f4_replay(ring, &mods, t, &o)? {
                 Ok((b, st)) => {
-                    add_stats(&mut stats, &st);
+                    stats.add_work(&st);
                     b
                 }
                 Err(_) => {
                     let (b, st) = f4_modp(ring, &mods, &o)?;
-                    add_stats(&mut stats, &st);
+                    stats.add_work(&st);
                     b
                 }
             },
@@ -334,7 +313,7 @@ pub fn groebner_f4_rational(
                     None => false,
                     Some(c) => {
                         let (b, st) = f4_modp(ring, &reduce_mod(ring, &ints, q), &vo)?;
-                        add_stats(&mut stats, &st);
+                        stats.add_work(&st);
                         b == c
                     }
                 }
