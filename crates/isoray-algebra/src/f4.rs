@@ -14,10 +14,17 @@
 //! reducers.
 //!
 //! A run can record its *trace* (Traverso's Gröbner trace carried over to
-//! F4): per matrix, which rows were worth reducing (those that gave new
-//! elements); replaying it modulo another prime builds only those rows, and
-//! checks that the same leading monomials come out. The multi-modular
-//! method over Q ([`crate::modular`]) learns it on its first prime.
+//! F4): per matrix, as numbers only, the pivot rows that were used and the
+//! rows that gave new elements, each with its columns. Replaying it modulo
+//! another prime reduces only those rows, with no monomial arithmetic,
+//! hashing or sorting, and checks that every result leads where the
+//! trace's did and has no term outside the trace's support. The multi-modular
+//! method over Q ([`crate::modular_f4`]) learns it modulo a random prime.
+//!
+//! Pairs are selected by the degree of their lcm for graded orders and by
+//! sugar otherwise (lex and block orders, where lcm degrees mislead).
+//! Setting the environment variable `F4_DEBUG` prints every matrix's size
+//! and reduction time on standard error.
 //!
 //! ```
 //! use isoray_algebra::{f4::f4_modp, parse_poly, Fp, GroebnerOptions, MonomialOrder, Poly, Ring};
@@ -41,8 +48,15 @@ use rustc_hash::FxHashSet;
 
 use crate::coeff::Fp;
 use crate::groebner::{check_budget, GroebnerError, GroebnerOptions, Stats};
-use crate::monomial::Monomial;
+use crate::monomial::{Monomial, MonomialOrder};
 use crate::poly::{Poly, Ring};
+
+/// Coefficients modulo p, shared.
+pub(crate) type Coefs = Rc<[u32]>;
+
+/// A reduced basis element: its place among the interreduction's rows,
+/// monomials (decreasing) and coefficients.
+type Element = (usize, Vec<Monomial>, Coefs);
 
 /// No pivot in this column.
 const NONE: u32 = u32::MAX;
@@ -174,12 +188,16 @@ struct Row {
     /// Shared by the multiples of one element (reducers stream only their
     /// column numbers from memory; the coefficients stay in cache).
     coefs: Rc<[u32]>,
+    /// The polynomial the coefficients belong to: an input's index, or the
+    /// number given to a new element (as a trace refers to it).
+    src: u32,
 }
 
 /// A row of a matrix: increasing column numbers (decreasing monomials).
 struct MatRow {
-    cols: Vec<u32>,
+    cols: Rc<[u32]>,
     coefs: Rc<[u32]>,
+    src: u32,
 }
 
 /// A critical pair: basis elements i < j and the lcm of their leading monomials.
@@ -188,6 +206,9 @@ struct Pair {
     i: usize,
     j: usize,
     lcm: Monomial,
+    /// The selection degree: the lcm's degree for graded orders, else
+    /// the sugar (Giovini et al.).
+    deg: u32,
 }
 
 /// a⁻¹ mod p for a prime p (a^(p−2)), p < 2³².
@@ -203,25 +224,61 @@ pub(crate) fn inv_mod(a: u64, p: u64) -> u64 {
     acc
 }
 
-/// What an F4 run learned, to be replayed modulo other primes: which inputs
-/// gave elements, and per matrix the rows (element, multiplier) worth
-/// building and the leading monomials they gave.
+/// What an F4 run learned, to be replayed modulo other primes: the
+/// supports of the inputs, and every reduction it made that mattered, as
+/// numbers only: per matrix its columns, the pivot rows that were used
+/// (which polynomial, on which columns) and the rows that gave new
+/// elements, with the columns their results occupy. A replay builds no
+/// monomial, hashes nothing and skips the rows that reduced to zero.
 #[derive(Debug, Clone, Default)]
 pub struct F4Trace {
-    inputs: Vec<(usize, Monomial)>,
-    rounds: Vec<RoundTrace>,
+    /// Per input (by its index), its monomials from the leading one down.
+    inputs: Vec<Vec<Monomial>>,
+    steps: Vec<Step>,
+    /// The reduced basis: per element (increasing leading monomial) the row
+    /// of the last step it is and the monomials of its columns.
+    outputs: Vec<(usize, Vec<Monomial>)>,
 }
 
+/// A recorded row: polynomial `src` on columns `cols`.
+#[derive(Debug, Clone)]
+struct RecRow {
+    src: u32,
+    cols: Rc<[u32]>,
+}
+
+/// One recorded matrix.
 #[derive(Debug, Clone, Default)]
-struct RoundTrace {
-    rows: Vec<(usize, Monomial)>,
-    leads: Vec<Monomial>,
+struct Step {
+    ncols: usize,
+    pivots: Vec<RecRow>,
+    /// Rows reduced in turn, each with the columns of its result; with
+    /// `keep_lead` false each result is the next new polynomial and a pivot.
+    reduce: Vec<(RecRow, Rc<[u32]>)>,
+    keep_lead: bool,
 }
 
 impl F4Trace {
     /// Matrices recorded.
     pub fn rounds(&self) -> usize {
-        self.rounds.len()
+        self.steps.len()
+    }
+
+    /// The reduced basis's monomials, per element by increasing leading
+    /// monomial, from the leading one down.
+    pub fn output_monomials(&self) -> impl Iterator<Item = &[Monomial]> {
+        self.outputs.iter().map(|(_, m)| m.as_slice())
+    }
+
+    /// Row entries (pivots and reduced rows) a replay streams.
+    pub fn entries(&self) -> usize {
+        self.steps
+            .iter()
+            .map(|s| {
+                s.pivots.iter().map(|r| r.cols.len()).sum::<usize>()
+                    + s.reduce.iter().map(|r| r.0.cols.len()).sum::<usize>()
+            })
+            .sum()
     }
 }
 
@@ -244,7 +301,16 @@ struct F4<'r> {
     lead_mask: Vec<u64>,
     /// Whether an element is still in the basis (not made redundant).
     alive: Vec<bool>,
+    /// Sugar degree of each element.
+    sugar: Vec<u32>,
+    /// Whether the order refines the total degree (pairs are then selected
+    /// by the degree of their lcm, else by sugar).
+    graded: bool,
     pairs: Vec<Pair>,
+    /// The number the next new element gets (after the inputs' indices).
+    next_id: u32,
+    /// The matrices recorded, when learning a trace.
+    rec: Option<Vec<Step>>,
 }
 
 impl<'r> F4<'r> {
@@ -260,7 +326,11 @@ impl<'r> F4<'r> {
             lead: Vec::new(),
             lead_mask: Vec::new(),
             alive: Vec::new(),
+            sugar: Vec::new(),
+            graded: matches!(ring.order(), MonomialOrder::DegLex | MonomialOrder::DegRevLex),
             pairs: Vec::new(),
+            next_id: 0,
+            rec: None,
         }
     }
 
@@ -285,6 +355,7 @@ impl<'r> F4<'r> {
         Row {
             mons,
             coefs: self.basis[g].coefs.clone(),
+            src: self.basis[g].src,
         }
     }
 
@@ -292,7 +363,7 @@ impl<'r> F4<'r> {
     /// chain criterion (M: another new pair's lcm properly divides this
     /// one's; F: one pair per lcm) and the product criterion; the old pairs
     /// that lm(h) makes redundant (B_k) are dropped.
-    fn update_pairs(&mut self, h: usize, lh: &Monomial) {
+    fn update_pairs(&mut self, h: usize, lh: &Monomial, sugar: u32) {
         let cand: Vec<(usize, Monomial)> = (0..h)
             .filter(|&g| self.alive[g])
             .map(|g| (g, self.lead[g].lcm(lh)))
@@ -312,10 +383,17 @@ impl<'r> F4<'r> {
             } else if dominated || same_as_coprime {
                 self.stats.removed_chain += 1;
             } else {
+                let d = l.degree();
+                let deg = if self.graded {
+                    d
+                } else {
+                    (self.sugar[*g] + d - self.lead[*g].degree()).max(sugar + d - lh.degree())
+                };
                 self.pairs.push(Pair {
                     i: *g,
                     j: h,
                     lcm: l.clone(),
+                    deg,
                 });
                 kept += 1;
             }
@@ -337,12 +415,12 @@ impl<'r> F4<'r> {
     /// alive element's) to the basis, with its pairs if `pairs`; elements
     /// whose leading monomial it divides are no longer alive (their pairs
     /// with it are made first, as Gebauer and Möller's UPDATE does).
-    fn insert(&mut self, row: Row, pairs: bool) {
+    fn insert(&mut self, row: Row, sugar: u32, pairs: bool) {
         let h = self.basis.len();
         let lh = self.table.monos[row.mons[0] as usize].clone();
         let mh = self.table.masks[row.mons[0] as usize];
         if pairs {
-            self.update_pairs(h, &lh);
+            self.update_pairs(h, &lh, sugar);
         }
         for g in 0..h {
             if self.alive[g] && mh & !self.lead_mask[g] == 0 && lh.divides(&self.lead[g]) {
@@ -353,6 +431,7 @@ impl<'r> F4<'r> {
         self.lead.push(lh);
         self.lead_mask.push(mh);
         self.alive.push(true);
+        self.sugar.push(sugar);
     }
 
     /// An alive element whose leading monomial divides monomial `m`.
@@ -415,7 +494,11 @@ impl<'r> F4<'r> {
             let inv = inv_mod(coefs[0] as u64, self.p);
             coefs = coefs.iter().map(|&c| (c as u64 * inv % self.p) as u32).collect();
         }
-        MatRow { cols, coefs }
+        MatRow {
+            cols,
+            coefs,
+            src: row.src,
+        }
     }
 
     /// Makes `rows` pivots of their leading columns (where there is none yet).
@@ -430,12 +513,94 @@ impl<'r> F4<'r> {
         }
     }
 
-    /// Reduces `rows` by the pivots (`piv[c]`: the index in `store` of the
-    /// row whose leading column is c) with a dense accumulator. With
+    /// Reduces `row` by the pivots (`piv[c]`: the index in `store` of the
+    /// monic row whose leading column is c) in the dense accumulator `acc`
+    /// (zero on entry): returns the columns left nonzero, increasing, their
+    /// values (below p) left in `acc`. With `keep_lead` the row's leading
+    /// term stays and only its tail is reduced. `used` collects the pivots
+    /// used.
+    fn reduce_row(
+        &mut self,
+        acc: &mut [u64],
+        row: &MatRow,
+        piv: &[u32],
+        store: &[MatRow],
+        keep_lead: bool,
+        mut used: Option<&mut Vec<u32>>,
+    ) -> Vec<u32> {
+        let p = self.p;
+        let p2 = p * p;
+        // How many products (p − 1)² fit on top of a value below p² in a u64.
+        let headroom = (u64::MAX - p2) / ((p - 1) * (p - 1)).max(1);
+        let ncols = acc.len();
+        for (&c, &v) in row.cols.iter().zip(row.coefs.iter()) {
+            acc[c as usize] = v as u64;
+        }
+        let first = row.cols[0] as usize;
+        let mut pending = 0u64;
+        let mut nz: Vec<u32> = Vec::new();
+        if keep_lead {
+            nz.push(first as u32);
+        }
+        for c in first + usize::from(keep_lead)..ncols {
+            let a = acc[c];
+            if a == 0 {
+                continue;
+            }
+            let v = a % p;
+            if v == 0 {
+                acc[c] = 0;
+                continue;
+            }
+            let k = piv[c];
+            if k == NONE {
+                acc[c] = v;
+                nz.push(c as u32);
+                continue;
+            }
+            if let Some(u) = used.as_deref_mut() {
+                u.push(k);
+            }
+            // acc −= v·pivot (monic: its leading term cancels column c).
+            acc[c] = 0;
+            let f = p - v;
+            let pr = &store[k as usize];
+            let (cols, coefs) = (&pr.cols[1..], &pr.coefs[1..]);
+            if headroom >= 16 {
+                // Small p: add products unreduced, and bring the row
+                // below p before `headroom` of them could overflow.
+                for (&cc, &pc) in cols.iter().zip(coefs) {
+                    // SAFETY: every column of a row is below ncols = acc.len().
+                    unsafe { *acc.get_unchecked_mut(cc as usize) += f * pc as u64 };
+                }
+                pending += 1;
+                if pending + 1 >= headroom {
+                    for a in &mut acc[c + 1..] {
+                        *a %= p;
+                    }
+                    pending = 0;
+                }
+            } else {
+                for (&cc, &pc) in cols.iter().zip(coefs) {
+                    // SAFETY: as above.
+                    let a = unsafe { acc.get_unchecked_mut(cc as usize) };
+                    let x = *a + f * pc as u64;
+                    *a = if x >= p2 { x - p2 } else { x };
+                }
+            }
+            self.stats.reduction_steps += 1;
+        }
+        nz
+    }
+
+    /// Reduces `rows` by the pivots with [`F4::reduce_row`]. With
     /// `keep_lead` false a nonzero result, monic, becomes the pivot of its
-    /// leading column (so later rows are reduced by it too) and is returned
-    /// (None for rows that reduce to zero); with `keep_lead` true the rows'
-    /// leading terms stay and only their tails are reduced (interreduction).
+    /// leading column (so later rows are reduced by it too) and a new
+    /// polynomial; with `keep_lead` true the rows' leading terms stay and
+    /// only their tails are reduced (interreduction). Returns each row's
+    /// result (its index in `store`, None for a row that reduced to zero);
+    /// when learning a trace, records the matrix (`store[..fixed]` were its
+    /// pivots before the rows came).
     fn echelon(
         &mut self,
         ncols: usize,
@@ -445,68 +610,19 @@ impl<'r> F4<'r> {
         keep_lead: bool,
     ) -> Result<Vec<Option<u32>>, GroebnerError> {
         let p = self.p;
-        let p2 = p * p;
-        // How many products (p − 1)² fit on top of a value below p² in a u64.
-        let headroom = (u64::MAX - p2) / ((p - 1) * (p - 1)).max(1);
+        let fixed = store.len();
+        let learning = self.rec.is_some();
         let mut acc = vec![0u64; ncols];
         let mut out = Vec::with_capacity(rows.len());
+        let mut need = vec![false; if learning { fixed } else { 0 }];
+        let mut reduced = Vec::new();
+        let mut used = Vec::new();
         for (n, row) in rows.into_iter().enumerate() {
             if n % 64 == 63 {
                 self.check()?;
             }
-            for (&c, &v) in row.cols.iter().zip(row.coefs.iter()) {
-                acc[c as usize] = v as u64;
-            }
-            let first = row.cols[0] as usize;
-            let mut pending = 0u64;
-            let mut nz: Vec<u32> = Vec::new();
-            if keep_lead {
-                nz.push(first as u32);
-            }
-            for c in first + usize::from(keep_lead)..ncols {
-                let a = acc[c];
-                if a == 0 {
-                    continue;
-                }
-                let v = a % p;
-                if v == 0 {
-                    acc[c] = 0;
-                    continue;
-                }
-                let k = piv[c];
-                if k == NONE {
-                    acc[c] = v;
-                    nz.push(c as u32);
-                    continue;
-                }
-                // acc −= v·pivot (monic: its leading term cancels column c).
-                acc[c] = 0;
-                let f = p - v;
-                let pr = &store[k as usize];
-                let (cols, coefs) = (&pr.cols[1..], &pr.coefs[1..]);
-                if headroom >= 16 {
-                    // Small p: add products unreduced, and bring the row
-                    // below p before `headroom` of them could overflow.
-                    let acc = &mut acc[..];
-                    for (&cc, &pc) in cols.iter().zip(coefs) {
-                        // SAFETY: every column of a row is below ncols = acc.len().
-                        unsafe { *acc.get_unchecked_mut(cc as usize) += f * pc as u64 };
-                    }
-                    pending += 1;
-                    if pending + 1 >= headroom {
-                        for a in &mut acc[c + 1..] {
-                            *a %= p;
-                        }
-                        pending = 0;
-                    }
-                } else {
-                    for (&cc, &pc) in cols.iter().zip(coefs) {
-                        let x = acc[cc as usize] + f * pc as u64;
-                        acc[cc as usize] = if x >= p2 { x - p2 } else { x };
-                    }
-                }
-                self.stats.reduction_steps += 1;
-            }
+            used.clear();
+            let nz = self.reduce_row(&mut acc, &row, piv, store, keep_lead, learning.then_some(&mut used));
             if nz.is_empty() {
                 self.stats.zero_reductions += 1;
                 out.push(None);
@@ -522,38 +638,67 @@ impl<'r> F4<'r> {
                 .collect();
             let lead = nz[0];
             let k = store.len() as u32;
-            store.push(MatRow { cols: nz, coefs });
+            let src = if keep_lead {
+                row.src
+            } else {
+                self.next_id += 1;
+                self.next_id - 1
+            };
+            let cols: Rc<[u32]> = nz.into();
+            if learning {
+                for &u in &used {
+                    if (u as usize) < fixed {
+                        need[u as usize] = true;
+                    }
+                }
+                reduced.push((
+                    RecRow {
+                        src: row.src,
+                        cols: row.cols.clone(),
+                    },
+                    cols.clone(),
+                ));
+            }
+            store.push(MatRow { cols, coefs, src });
             if !keep_lead {
                 piv[lead as usize] = k;
             }
             out.push(Some(k));
         }
+        if let Some(rec) = &mut self.rec {
+            rec.push(Step {
+                ncols,
+                pivots: (0..fixed)
+                    .filter(|&k| need[k])
+                    .map(|k| RecRow {
+                        src: store[k].src,
+                        cols: store[k].cols.clone(),
+                    })
+                    .collect(),
+                reduce: reduced,
+                keep_lead,
+            });
+        }
         Ok(out)
     }
 
-    /// One matrix: the pair rows `rows` (with the element and multiplier
-    /// each came from) and their reducers. Returns the new elements' rows,
-    /// and for each of `rows` whether it was needed (it became a pivot or
-    /// reduced to a new element).
-    fn matrix(&mut self, rows: Vec<Row>) -> Result<(Vec<Row>, Vec<bool>), GroebnerError> {
+    /// One matrix: the pair rows `rows` and their reducers. Returns the
+    /// new elements' rows, largest leading monomial first.
+    fn matrix(&mut self, rows: Vec<Row>) -> Result<Vec<Row>, GroebnerError> {
         let reducers = self.preprocess(&rows, false);
         let (order, col_of) = self.columns(rows.iter().chain(&reducers));
         let mut piv = vec![NONE; order.len()];
         let mut store: Vec<MatRow> = Vec::with_capacity(reducers.len() + rows.len());
         self.install(reducers, &col_of, &mut piv, &mut store);
-        let mut needed = vec![false; rows.len()];
         let mut todo = Vec::new();
-        let mut todo_of = Vec::new();
-        for (k, r) in rows.into_iter().enumerate() {
+        for r in rows {
             let m = self.to_matrix(r, &col_of);
             let c = m.cols[0] as usize;
             if piv[c] == NONE {
                 piv[c] = store.len() as u32;
                 store.push(m);
-                needed[k] = true;
             } else {
                 todo.push(m);
-                todo_of.push(k);
             }
         }
         let t0 = Instant::now();
@@ -572,29 +717,34 @@ impl<'r> F4<'r> {
                 t0.elapsed().as_secs_f64() * 1e3
             );
         }
-        let mut new = Vec::new();
-        for (k, res) in todo_of.into_iter().zip(results) {
-            if let Some(s) = res {
-                needed[k] = true;
+        let mut new: Vec<Row> = results
+            .into_iter()
+            .flatten()
+            .map(|s| {
                 let m = &store[s as usize];
-                new.push(Row {
+                Row {
                     mons: m.cols.iter().map(|&c| order[c as usize]).collect(),
                     coefs: m.coefs.clone(),
-                });
-            }
-        }
+                    src: m.src,
+                }
+            })
+            .collect();
         // Largest leading monomial first: a new element whose leading
         // monomial another one's divides then leaves the basis when that
         // one comes in (after their pair is made).
         new.sort_by(|a, b| self.cmp(b.mons[0], a.mons[0]));
-        Ok((new, needed))
+        Ok(new)
     }
 
-    /// The inputs, each reduced by the elements before it; returns which
-    /// inputs gave elements.
-    fn add_inputs(&mut self, rows: Vec<Row>, pairs: bool) -> Result<Vec<(usize, Monomial)>, GroebnerError> {
-        let mut gave = Vec::new();
-        for (k, row) in rows.into_iter().enumerate() {
+    /// The inputs, each reduced by the elements before it.
+    fn add_inputs(&mut self, rows: Vec<Row>, pairs: bool) -> Result<(), GroebnerError> {
+        for row in rows {
+            let sugar = row
+                .mons
+                .iter()
+                .map(|&m| self.table.monos[m as usize].degree())
+                .max()
+                .unwrap_or(0);
             let reducers = self.preprocess(std::slice::from_ref(&row), true);
             let (order, col_of) = self.columns(std::iter::once(&row).chain(&reducers));
             let mut piv = vec![NONE; order.len()];
@@ -603,18 +753,19 @@ impl<'r> F4<'r> {
             let row = MatRow {
                 cols: row.mons.iter().map(|&m| col_of[m as usize]).collect(),
                 coefs: row.coefs,
+                src: row.src,
             };
             if let Some(Some(s)) = self.echelon(order.len(), &mut piv, &mut store, vec![row], false)?.pop() {
                 let m = &store[s as usize];
                 let r = Row {
                     mons: m.cols.iter().map(|&c| order[c as usize]).collect(),
                     coefs: m.coefs.clone(),
+                    src: m.src,
                 };
-                gave.push((k, self.table.monos[r.mons[0] as usize].clone()));
-                self.insert(r, pairs);
+                self.insert(r, sugar, pairs);
             }
         }
-        Ok(gave)
+        Ok(())
     }
 
     fn report(&self, done: u64) {
@@ -623,46 +774,29 @@ impl<'r> F4<'r> {
         }
     }
 
-    /// The main loop: pairs of lowest degree, a matrix each time; records
-    /// the trace into `trace` if given.
-    fn run(&mut self, mut trace: Option<&mut F4Trace>) -> Result<(), GroebnerError> {
+    /// The main loop: pairs of lowest degree, a matrix each time.
+    fn run(&mut self) -> Result<(), GroebnerError> {
         let mut done = 0u64;
         self.report(done);
         while !self.pairs.is_empty() {
             self.check()?;
-            let d = self.pairs.iter().map(|q| q.lcm.degree()).min().expect("pairs");
-            let (now, later): (Vec<Pair>, Vec<Pair>) = self.pairs.drain(..).partition(|q| q.lcm.degree() == d);
+            let d = self.pairs.iter().map(|q| q.deg).min().expect("pairs");
+            let (now, later): (Vec<Pair>, Vec<Pair>) = self.pairs.drain(..).partition(|q| q.deg == d);
             self.pairs = later;
             self.stats.pairs_reduced += now.len() as u64;
             // Both halves of each pair; one row per (element, multiplier).
             let mut seen = FxHashSet::default();
-            let mut made = Vec::new();
             let mut rows = Vec::new();
             for q in &now {
                 for g in [q.i, q.j] {
                     let m = self.lead[g].quotient(&q.lcm).expect("lcm");
                     if seen.insert((g, m.clone())) {
                         rows.push(self.multiple(&m, g));
-                        made.push((g, m));
                     }
                 }
             }
-            let (new, needed) = self.matrix(rows)?;
-            let mut round = RoundTrace::default();
-            if trace.is_some() {
-                round.rows = made
-                    .into_iter()
-                    .zip(needed)
-                    .filter(|(_, n)| *n)
-                    .map(|(r, _)| r)
-                    .collect();
-            }
-            for r in new {
-                round.leads.push(self.table.monos[r.mons[0] as usize].clone());
-                self.insert(r, true);
-            }
-            if let Some(t) = trace.as_deref_mut() {
-                t.rounds.push(round);
+            for r in self.matrix(rows)? {
+                self.insert(r, d, true);
             }
             done += now.len() as u64;
             self.report(done);
@@ -670,34 +804,11 @@ impl<'r> F4<'r> {
         Ok(())
     }
 
-    /// Replays `trace`'s matrices.
-    fn replay(&mut self, trace: &F4Trace) -> Result<Result<(), TraceMismatch>, GroebnerError> {
-        if let Some(p) = &self.opts.progress {
-            p.update(0, trace.rounds.len() as u64);
-        }
-        for (k, round) in trace.rounds.iter().enumerate() {
-            self.check()?;
-            let rows = round.rows.iter().map(|(g, m)| self.multiple(m, *g)).collect();
-            let (new, _) = self.matrix(rows)?;
-            if new.len() != round.leads.len() {
-                return Ok(Err(TraceMismatch));
-            }
-            for (r, l) in new.into_iter().zip(&round.leads) {
-                if self.table.monos[r.mons[0] as usize] != *l {
-                    return Ok(Err(TraceMismatch));
-                }
-                self.insert(r, false);
-            }
-            if let Some(p) = &self.opts.progress {
-                p.update(k as u64 + 1, trace.rounds.len() as u64);
-            }
-        }
-        Ok(Ok(()))
-    }
-
     /// The reduced basis: the alive elements, each tail reduced by the
-    /// others in one matrix; monic, by increasing leading monomial.
-    fn reduced(&mut self) -> Result<Vec<Poly<Fp>>, GroebnerError> {
+    /// others in one matrix; per element (by increasing leading monomial)
+    /// its place among the matrix's reduced rows, its monomials and its
+    /// coefficients.
+    fn reduced(&mut self) -> Result<Vec<Element>, GroebnerError> {
         let alive: Vec<Row> = (0..self.basis.len())
             .filter(|&g| self.alive[g])
             .map(|g| self.basis[g].clone())
@@ -713,38 +824,34 @@ impl<'r> F4<'r> {
             rows.push(MatRow {
                 cols: m.cols.clone(),
                 coefs: m.coefs.clone(),
+                src: m.src,
             });
             store.push(m);
         }
         self.install(reducers, &col_of, &mut piv, &mut store);
         let done = self.echelon(order.len(), &mut piv, &mut store, rows, true)?;
-        let p = self.p;
-        let mut out: Vec<Poly<Fp>> = done
+        let mut out: Vec<Element> = done
             .into_iter()
-            .map(|s| {
+            .enumerate()
+            .map(|(k, s)| {
                 let m = &store[s.expect("a basis element keeps its leading term") as usize];
-                Poly::from_sorted(
-                    m.cols
-                        .iter()
-                        .zip(m.coefs.iter())
-                        .map(|(&c, &v)| {
-                            (
-                                self.table.monos[order[c as usize] as usize].clone(),
-                                Fp::new(v as i64, p),
-                            )
-                        })
-                        .collect(),
-                )
+                let monos = m
+                    .cols
+                    .iter()
+                    .map(|&c| self.table.monos[order[c as usize] as usize].clone())
+                    .collect();
+                (k, monos, m.coefs.clone())
             })
             .collect();
-        out.sort_by(|a, b| self.ring.cmp(a.lm().expect("nonzero"), b.lm().expect("nonzero")));
+        out.sort_by(|a, b| self.ring.cmp(&a.1[0], &b.1[0]));
         Ok(out)
     }
 
     /// The inputs as rows, by increasing leading monomial.
     fn input_rows(&mut self, polys: &[Poly<Fp>]) -> Vec<Row> {
         let mut rows: Vec<Row> = Vec::new();
-        for f in polys {
+        self.next_id = polys.len() as u32;
+        for (i, f) in polys.iter().enumerate() {
             let mut terms: Vec<(Monomial, u32)> = f
                 .terms()
                 .iter()
@@ -759,26 +866,49 @@ impl<'r> F4<'r> {
             rows.push(Row {
                 mons,
                 coefs: terms.iter().map(|(_, c)| *c).collect(),
+                src: i as u32,
             });
         }
         rows.sort_by(|a, b| self.cmp(a.mons[0], b.mons[0]));
         rows
     }
 
-    fn finish(&mut self) -> Result<(Vec<Poly<Fp>>, Stats), GroebnerError> {
+    /// The reduced basis, with the counters; records the outputs into
+    /// `trace` when learning.
+    fn finish(&mut self, trace: Option<&mut F4Trace>) -> Result<FpBasis, GroebnerError> {
         let n = self.alive.iter().filter(|a| **a).count() as u64;
         if let Some(p) = &self.opts.progress {
             p.stage("f4: interreduction");
             p.update(0, n);
         }
-        let basis = self.reduced()?;
+        let elems = self.reduced()?;
         if let Some(p) = &self.opts.progress {
             p.update(n, n);
+        }
+        let basis = elems
+            .iter()
+            .map(|(_, monos, coefs)| to_poly(monos, coefs, self.p))
+            .collect::<Vec<_>>();
+        if let Some(t) = trace {
+            t.steps = self.rec.take().unwrap_or_default();
+            t.outputs = elems.into_iter().map(|(k, monos, _)| (k, monos)).collect();
         }
         self.stats.basis_size = basis.len();
         self.stats.time = self.start.elapsed();
         Ok((basis, self.stats))
     }
+}
+
+/// The polynomial of coefficients `coefs` (zeros skipped) on `monos`.
+fn to_poly(monos: &[Monomial], coefs: &[u32], p: u64) -> Poly<Fp> {
+    Poly::from_sorted(
+        monos
+            .iter()
+            .zip(coefs)
+            .filter(|(_, &v)| v != 0)
+            .map(|(m, &v)| (m.clone(), Fp::new(v as i64, p)))
+            .collect(),
+    )
 }
 
 /// A reduced basis over GF(p) and the counters of its computation.
@@ -809,31 +939,43 @@ pub fn f4_learn(
     ring: &Ring,
     polys: &[Poly<Fp>],
     opts: &GroebnerOptions,
-    trace: Option<&mut F4Trace>,
+    mut trace: Option<&mut F4Trace>,
 ) -> Result<(Vec<Poly<Fp>>, Stats), GroebnerError> {
+    if let Some(t) = trace.as_deref_mut() {
+        *t = F4Trace {
+            inputs: polys
+                .iter()
+                .map(|f| {
+                    f.terms()
+                        .iter()
+                        .filter(|(_, c)| c.value() != 0)
+                        .map(|(m, _)| m.clone())
+                        .collect()
+                })
+                .collect(),
+            ..F4Trace::default()
+        };
+    }
     let Some(p) = modulus(polys) else {
         return Ok((Vec::new(), Stats::default()));
     };
     let mut f4 = F4::new(ring, p, opts);
+    if trace.is_some() {
+        f4.rec = Some(Vec::new());
+    }
     if let Some(pr) = &opts.progress {
         pr.stage("f4");
     }
     let rows = f4.input_rows(polys);
-    let inputs = f4.add_inputs(rows, true)?;
-    match trace {
-        Some(t) => {
-            t.inputs = inputs;
-            t.rounds.clear();
-            f4.run(Some(t))?;
-        }
-        None => f4.run(None)?,
-    }
-    f4.finish()
+    f4.add_inputs(rows, true)?;
+    f4.run()?;
+    f4.finish(trace)
 }
 
 /// Replays `trace` (learned by [`f4_learn`] on the same inputs modulo another
 /// prime) modulo the prime of `polys`: the reduced basis, or
-/// `Ok(Err(TraceMismatch))` when another leading monomial comes out (the
+/// `Ok(Err(TraceMismatch))` when the reductions come out otherwise (a
+/// leading term vanishes, or a term appears where the trace has none: the
 /// caller then runs [`f4_modp`] or drops the prime). Its result is a
 /// Gröbner basis only if the trace's run was one for this prime too, which
 /// the multi-modular method's verification settles.
@@ -843,22 +985,129 @@ pub fn f4_replay(
     trace: &F4Trace,
     opts: &GroebnerOptions,
 ) -> Result<Result<FpBasis, TraceMismatch>, GroebnerError> {
+    let p = modulus(polys).unwrap_or(2);
+    Ok(f4_replay_coefs(ring, polys, trace, opts)?.map(|(coefs, stats)| {
+        let basis = trace
+            .outputs
+            .iter()
+            .zip(&coefs)
+            .map(|((_, monos), c)| to_poly(monos, c, p))
+            .collect();
+        (basis, stats)
+    }))
+}
+
+/// [`f4_replay`]'s basis as coefficients on the monomials of
+/// [`F4Trace::output_monomials`] (zeros kept).
+pub(crate) fn f4_replay_coefs(
+    ring: &Ring,
+    polys: &[Poly<Fp>],
+    trace: &F4Trace,
+    opts: &GroebnerOptions,
+) -> Result<Result<(Vec<Coefs>, Stats), TraceMismatch>, GroebnerError> {
     let Some(p) = modulus(polys) else {
         return Ok(Err(TraceMismatch));
     };
+    if polys.len() != trace.inputs.len() {
+        return Ok(Err(TraceMismatch));
+    }
     let mut f4 = F4::new(ring, p, opts);
     if let Some(pr) = &opts.progress {
         pr.stage("f4 replay");
+        pr.update(0, trace.steps.len() as u64);
     }
-    let rows = f4.input_rows(polys);
-    let inputs = f4.add_inputs(rows, false)?;
-    if inputs != trace.inputs {
-        return Ok(Err(TraceMismatch));
+    // The coefficients of every polynomial, on the trace's supports.
+    let mut vals: Vec<Rc<[u32]>> = Vec::with_capacity(polys.len());
+    for (f, support) in polys.iter().zip(&trace.inputs) {
+        match align(ring, f, support) {
+            Some(v) => vals.push(v),
+            None => return Ok(Err(TraceMismatch)),
+        }
     }
-    if let Err(e) = f4.replay(trace)? {
-        return Ok(Err(e));
+    let mut last = Vec::new();
+    for (k, step) in trace.steps.iter().enumerate() {
+        f4.check()?;
+        let mut piv = vec![NONE; step.ncols];
+        let mut store = Vec::with_capacity(step.pivots.len() + step.reduce.len());
+        for r in &step.pivots {
+            if vals[r.src as usize][0] == 0 {
+                return Ok(Err(TraceMismatch));
+            }
+            piv[r.cols[0] as usize] = store.len() as u32;
+            store.push(MatRow {
+                cols: r.cols.clone(),
+                coefs: vals[r.src as usize].clone(),
+                src: r.src,
+            });
+        }
+        let mut acc = vec![0u64; step.ncols];
+        last.clear();
+        for (r, support) in &step.reduce {
+            let row = MatRow {
+                cols: r.cols.clone(),
+                coefs: vals[r.src as usize].clone(),
+                src: r.src,
+            };
+            let nz = f4.reduce_row(&mut acc, &row, &piv, &store, step.keep_lead, None);
+            // The result must lead where the trace's did, and have no term
+            // outside the trace's support.
+            if nz.first() != support.first() {
+                return Ok(Err(TraceMismatch));
+            }
+            let mut it = support.iter().peekable();
+            for &c in &nz {
+                while it.next_if(|&&s| s < c).is_some() {}
+                if it.next_if_eq(&&c).is_none() {
+                    return Ok(Err(TraceMismatch));
+                }
+            }
+            let inv = if step.keep_lead {
+                1
+            } else {
+                inv_mod(acc[nz[0] as usize], p)
+            };
+            let coefs: Rc<[u32]> = support
+                .iter()
+                .map(|&c| (std::mem::take(&mut acc[c as usize]) * inv % p) as u32)
+                .collect();
+            if step.keep_lead {
+                last.push(coefs);
+            } else {
+                piv[support[0] as usize] = store.len() as u32;
+                store.push(MatRow {
+                    cols: support.clone(),
+                    coefs: coefs.clone(),
+                    src: vals.len() as u32,
+                });
+                vals.push(coefs);
+            }
+        }
+        if let Some(pr) = &opts.progress {
+            pr.update(k as u64 + 1, trace.steps.len() as u64);
+        }
     }
-    f4.finish().map(Ok)
+    let basis: Vec<Rc<[u32]>> = trace.outputs.iter().map(|(k, _)| last[*k].clone()).collect();
+    f4.stats.basis_size = basis.len();
+    f4.stats.time = f4.start.elapsed();
+    Ok(Ok((basis, f4.stats)))
+}
+
+/// The coefficients of `f` on `support` (its monomials, decreasing), None
+/// if `f` has a term outside it.
+fn align(ring: &Ring, f: &Poly<Fp>, support: &[Monomial]) -> Option<Rc<[u32]>> {
+    let mut out = vec![0u32; support.len()];
+    let mut k = 0;
+    for (m, c) in f.terms().iter().filter(|(_, c)| c.value() != 0) {
+        while k < support.len() && ring.cmp(&support[k], m) == Ordering::Greater {
+            k += 1;
+        }
+        if k == support.len() || support[k] != *m {
+            return None;
+        }
+        out[k] = c.value() as u32;
+        k += 1;
+    }
+    Some(out.into())
 }
 
 #[cfg(test)]

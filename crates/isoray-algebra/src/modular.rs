@@ -10,9 +10,9 @@
 use std::collections::HashMap;
 
 use num_integer::Integer;
-use num_traits::{One, Signed, Zero};
+use num_traits::{One, Zero};
 
-use crate::coeff::{is_prime, to_zint, Fp, Int, Rat, ZInt};
+use crate::coeff::{from_zint, is_prime, to_zint, Fp, Int, Rat, ZInt};
 use crate::groebner::{
     check_groebner_basis, groebner_in, groebner_replay, groebner_traced, with_stage_prefix, GroebnerError,
     GroebnerOptions, Stats,
@@ -20,6 +20,8 @@ use crate::groebner::{
 use crate::monomial::Monomial;
 use crate::parse::to_primitive_integer;
 use crate::poly::{Poly, Ring};
+use dashu_base::{DivRem, Gcd, SquareRoot};
+use dashu_int::UBig;
 
 /// The primes used, largest first: primes just below 2^62 (measured: fewer
 /// primes beat cheaper arithmetic with 31-bit primes).
@@ -35,20 +37,88 @@ fn primes() -> impl Iterator<Item = u64> {
 
 /// r/s ≡ a (mod m) with |r|, s ≤ √(m/2), if it exists (Wang's algorithm).
 pub fn rational_reconstruction(a: &Int, m: &Int) -> Option<Rat> {
-    let bound = (m / Int::from(2)).sqrt();
-    let (mut r0, mut r1) = (m.clone(), a.mod_floor(m));
-    let (mut s0, mut s1) = (Int::zero(), Int::one());
-    while r1 > bound {
-        let q = &r0 / &r1;
-        let r2 = &r0 - &q * &r1;
-        let s2 = &s0 - &q * &s1;
-        r0 = std::mem::replace(&mut r1, r2);
-        s0 = std::mem::replace(&mut s1, s2);
+    Reconstructor::new(m).reconstruct(a)
+}
+
+/// Rational reconstruction modulo one modulus m, the bound √(m/2)
+/// computed once, with a shortcut for a known denominator. The arithmetic
+/// is dashu's (Lehmer's gcd, fast division).
+pub struct Reconstructor {
+    m: UBig,
+    half: UBig,
+    bound: UBig,
+}
+
+impl Reconstructor {
+    /// For residues modulo `m` (> 1).
+    pub fn new(m: &Int) -> Reconstructor {
+        let m = UBig::try_from(to_zint(m)).unwrap_or(UBig::ONE);
+        Reconstructor::new_u(m)
     }
-    if s1.is_zero() || s1.abs() > bound || !r1.gcd(&s1).is_one() {
-        return None;
+
+    /// [`Reconstructor::new`] for a dashu modulus.
+    pub(crate) fn new_u(m: UBig) -> Reconstructor {
+        let half = &m >> 1;
+        Reconstructor {
+            bound: half.sqrt(),
+            half,
+            m,
+        }
     }
-    Some(Rat::new(r1, s1))
+
+    /// r/s ≡ a (mod m) with |r|, s ≤ √(m/2), if it exists: Wang's
+    /// algorithm, the half-extended Euclidean algorithm stopped at the bound.
+    pub fn reconstruct(&self, a: &Int) -> Option<Rat> {
+        let a = to_zint(&a.mod_floor(&from_zint(&ZInt::from(self.m.clone()))));
+        let a = UBig::try_from(a).unwrap_or(UBig::ZERO);
+        self.reconstruct_u(&a).map(|(n, d)| to_rat(&n, &d))
+    }
+
+    /// Wang's algorithm for a in 0..m: (numerator, positive denominator).
+    pub(crate) fn reconstruct_u(&self, a: &UBig) -> Option<(ZInt, ZInt)> {
+        let (mut r0, mut r1) = (self.m.clone(), a.clone());
+        let (mut s0, mut s1) = (ZInt::ZERO, ZInt::ONE);
+        while r1 > self.bound {
+            let (q, r2) = (&r0).div_rem(&r1);
+            let s2 = &s0 - ZInt::from(q) * &s1;
+            r0 = std::mem::replace(&mut r1, r2);
+            s0 = std::mem::replace(&mut s1, s2);
+        }
+        let neg = s1 < ZInt::ZERO;
+        let s = UBig::try_from(if neg { -s1 } else { s1 }).ok()?;
+        if s.is_zero() || s > self.bound || !(&r1).gcd(&s).is_one() {
+            return None;
+        }
+        let r = ZInt::from(r1);
+        Some((if neg { -r } else { r }, ZInt::from(s)))
+    }
+
+    /// As [`Reconstructor::reconstruct_u`], trying the denominator `den`
+    /// first: if a·den mod m (symmetric) is within the bound, the fraction
+    /// is it over den (the reconstruction within the bounds is unique), at
+    /// the cost of one product, one division and one gcd.
+    pub(crate) fn reconstruct_with(&self, a: &UBig, den: &UBig) -> Option<(ZInt, ZInt)> {
+        if !den.is_zero() && *den <= self.bound {
+            let c = (a * den) % &self.m;
+            let (neg, mag) = if c > self.half { (true, &self.m - c) } else { (false, c) };
+            if mag <= self.bound {
+                let g = (&mag).gcd(den);
+                let (n, d) = if g.is_one() {
+                    (mag, den.clone())
+                } else {
+                    (mag / &g, den / &g)
+                };
+                let n = ZInt::from(n);
+                return Some((if neg { -n } else { n }, ZInt::from(d)));
+            }
+        }
+        self.reconstruct_u(a)
+    }
+}
+
+/// n/d as a [`Rat`] (already in lowest terms, d > 0).
+pub(crate) fn to_rat(n: &ZInt, d: &ZInt) -> Rat {
+    Rat::new_raw(from_zint(n), from_zint(d))
 }
 
 /// A basis lifted so far: for each element, monomial → residue modulo `modulus`.
