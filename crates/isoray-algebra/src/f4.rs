@@ -369,15 +369,20 @@ impl<'r> F4<'r> {
             .map(|g| (g, self.lead[g].lcm(lh)))
             .collect();
         self.stats.pairs_created += cand.len() as u64;
+        let criteria = self.opts.criteria;
         let mut kept = 0;
         for (k, (g, l)) in cand.iter().enumerate() {
-            let dominated = cand
-                .iter()
-                .enumerate()
-                .any(|(k2, (_, l2))| k2 != k && l2.divides(l) && (l2 != l || k2 < k));
-            let coprime = self.lead[*g].coprime(lh);
+            let dominated = criteria.chain
+                && cand
+                    .iter()
+                    .enumerate()
+                    .any(|(k2, (_, l2))| k2 != k && l2.divides(l) && (l2 != l || k2 < k));
+            let coprime = criteria.product && self.lead[*g].coprime(lh);
             // A pair whose lcm equals a coprime pair's lcm goes with it (F).
-            let same_as_coprime = !coprime && cand.iter().any(|(g2, l2)| l2 == l && self.lead[*g2].coprime(lh));
+            let same_as_coprime = criteria.chain
+                && criteria.product
+                && !coprime
+                && cand.iter().any(|(g2, l2)| l2 == l && self.lead[*g2].coprime(lh));
             if coprime {
                 self.stats.removed_product += 1;
             } else if dominated || same_as_coprime {
@@ -404,7 +409,11 @@ impl<'r> F4<'r> {
         let mut removed = 0;
         self.pairs.retain(|q| {
             k += 1;
-            let drop = k <= before && lh.divides(&q.lcm) && lead[q.i].lcm(lh) != q.lcm && lead[q.j].lcm(lh) != q.lcm;
+            let drop = criteria.chain
+                && k <= before
+                && lh.divides(&q.lcm)
+                && lead[q.i].lcm(lh) != q.lcm
+                && lead[q.j].lcm(lh) != q.lcm;
             removed += u64::from(drop);
             !drop
         });

@@ -56,6 +56,9 @@ pub struct GroebnerOptions {
     pub method: Method,
     /// How F4's multi-modular result over Q is checked.
     pub verify: crate::modular_f4::Verify,
+    /// Which criteria discard S-pairs (both by default; switching them off
+    /// changes the work, never the basis).
+    pub criteria: Criteria,
     /// Told how far the computation got (none by default):
     ///
     /// * each Buchberger run is a stage `groebner`: `done` is the S-pairs
@@ -74,6 +77,35 @@ pub struct GroebnerOptions {
     pub progress: Option<Arc<dyn Progress + Send>>,
 }
 
+/// The criteria that discard S-pairs before they are reduced (Buchberger's
+/// first and second criteria in Gebauer and Möller's installation), for
+/// both engines. The thesis's ablation switches them off
+/// (`isoray groebner --no-criteria`, `--no-chain-criterion`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Criteria {
+    /// Drop pairs whose leading monomials are coprime (first criterion).
+    pub product: bool,
+    /// The chain criterion: Gebauer–Möller's M, F and B_k.
+    pub chain: bool,
+}
+
+impl Default for Criteria {
+    fn default() -> Criteria {
+        Criteria {
+            product: true,
+            chain: true,
+        }
+    }
+}
+
+impl Criteria {
+    /// No criterion: every pair is reduced.
+    pub const NONE: Criteria = Criteria {
+        product: false,
+        chain: false,
+    };
+}
+
 impl std::fmt::Debug for GroebnerOptions {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("GroebnerOptions")
@@ -82,6 +114,7 @@ impl std::fmt::Debug for GroebnerOptions {
             .field("algorithm", &self.algorithm)
             .field("method", &self.method)
             .field("verify", &self.verify)
+            .field("criteria", &self.criteria)
             .field("progress", &self.progress.is_some())
             .finish()
     }
@@ -420,14 +453,12 @@ fn run<D: Domain>(
     let mut st = State::new(ring, opts);
     let mut trace = Trace::default();
     st.stage("groebner");
-    for p in prepared_inputs(ring, polys) {
-        let h = st.reduce_full(&p, None)?;
-        if !h.is_zero() {
-            let sugar = p.degree() as u32;
-            let h = h.normalized();
-            trace.inputs.push(h.lm().expect("nonzero").clone());
-            st.update(h, sugar);
-        }
+    // The inputs enter as they are (Buchberger's algorithm as stated; the
+    // criteria take care of what they share).
+    for h in prepared_inputs(ring, polys) {
+        let sugar = h.degree() as u32;
+        trace.inputs.push(h.lm().expect("nonzero").clone());
+        st.update(h, sugar);
     }
     st.report_pairs(0, 0);
     while let Some(pair) = st.select() {
@@ -469,12 +500,7 @@ pub fn groebner_replay<D: Domain>(
     let mut st = State::new(ring, opts);
     let inputs = prepared_inputs(ring, polys);
     let mut k = 0;
-    for p in inputs {
-        let h = st.reduce_full(&p, None)?;
-        if h.is_zero() {
-            continue;
-        }
-        let h = h.normalized();
+    for h in inputs {
         if trace.inputs.get(k) != h.lm() {
             return Ok(None);
         }
@@ -719,10 +745,11 @@ impl<'a, D: Domain> State<'a, D> {
         self.stats.pairs_created += cands.len() as u64;
         // Criterion M and F: drop a pair whose lcm is a multiple of another new pair's lcm
         // (for equal lcms keep the last; coprime pairs are kept here so they can remove others).
+        let criteria = self.opts.criteria;
         let mut keep: Vec<(usize, Monomial, bool)> = Vec::new();
         while let Some((g1, l1, coprime)) = cands.pop() {
-            let dominated =
-                cands.iter().any(|(_, l2, _)| l2.divides(&l1)) || keep.iter().any(|(_, l2, _)| l2.divides(&l1));
+            let dominated = criteria.chain
+                && (cands.iter().any(|(_, l2, _)| l2.divides(&l1)) || keep.iter().any(|(_, l2, _)| l2.divides(&l1)));
             if coprime || !dominated {
                 keep.push((g1, l1, coprime));
             } else {
@@ -731,13 +758,15 @@ impl<'a, D: Domain> State<'a, D> {
         }
         // Product criterion.
         let before = keep.len();
-        keep.retain(|(_, _, coprime)| !coprime);
+        if criteria.product {
+            keep.retain(|(_, _, coprime)| !coprime);
+        }
         self.stats.removed_product += (before - keep.len()) as u64;
         // Criterion B_k on the old pairs.
         let old = std::mem::take(&mut self.pairs);
         for p in old {
             let (li, lj) = (self.lm(p.i).lcm(&hm), self.lm(p.j).lcm(&hm));
-            if hm.divides(&p.lcm) && li != p.lcm && lj != p.lcm {
+            if criteria.chain && hm.divides(&p.lcm) && li != p.lcm && lj != p.lcm {
                 self.stats.removed_chain += 1;
             } else {
                 self.pairs.push(p);
@@ -753,17 +782,37 @@ impl<'a, D: Domain> State<'a, D> {
                 lcm,
             });
         }
-        // Basis elements whose leading monomial is a multiple of lm(h) are no longer needed.
-        let polys = &self.polys;
-        self.basis
-            .retain(|&g| !hm.divides(polys[g].poly.lm().expect("nonzero")));
+        // Basis elements whose leading monomial is a multiple of lm(h) are
+        // no longer needed for new pairs (the chain criterion's reason).
+        if criteria.chain {
+            let polys = &self.polys;
+            self.basis
+                .retain(|&g| !hm.divides(polys[g].poly.lm().expect("nonzero")));
+        }
         self.basis.push(new);
     }
 
     /// The reduced basis from the current (minimal) one.
     fn interreduce(&mut self) -> Result<Vec<Poly<D>>, GroebnerError> {
         let ring = self.ring;
-        let ids = self.basis.clone();
+        // A minimal basis first (without the chain criterion the basis
+        // keeps elements whose leading monomial another one's divides; of
+        // equal leading monomials the latest stays).
+        let lm = |k: usize| self.polys[k].poly.lm().expect("nonzero");
+        let ids: Vec<usize> = self
+            .basis
+            .iter()
+            .enumerate()
+            .filter(|&(a, &g)| {
+                !self
+                    .basis
+                    .iter()
+                    .enumerate()
+                    .any(|(b, &h)| b != a && lm(h).divides(lm(g)) && (lm(h) != lm(g) || b > a))
+            })
+            .map(|(_, &g)| g)
+            .collect();
+        self.basis = ids.clone();
         let mut out = Vec::with_capacity(ids.len());
         self.stage("interreduction");
         self.report(0, ids.len() as u64);
@@ -791,7 +840,13 @@ pub fn check_groebner_basis<D: Domain>(
     inputs: &[Poly<D>],
     opts: &GroebnerOptions,
 ) -> Result<bool, GroebnerError> {
-    let mut st = State::new(ring, opts);
+    // With the criteria whatever the caller's options say (the minimality
+    // test below relies on the chain criterion's pruning).
+    let opts = GroebnerOptions {
+        criteria: Criteria::default(),
+        ..opts.clone()
+    };
+    let mut st = State::new(ring, &opts);
     for g in basis {
         if g.is_zero() {
             continue;
@@ -1029,6 +1084,147 @@ mod tests {
             (counter.done(), counter.total()),
             (r.basis.len() as u64, r.basis.len() as u64)
         );
+    }
+
+    /// The thesis's Example 1.3 (x = s + t, y = s, z = t in lex
+    /// s > t > x > y > z) and its counts. Sage's toy Buchberger (ordered
+    /// pairs, both ways round, no criterion) meets 8 reductions to zero;
+    /// with unordered pairs and no criterion (`--no-criteria`) six S-pairs
+    /// are reduced (one gives x − y − z, five vanish); with the criteria a
+    /// single pair is reduced and the five coprime ones are discarded. Both
+    /// engines, the same basis every time.
+    #[test]
+    fn example_1_3_counts_with_and_without_criteria() {
+        let ring = Ring::new(&["s", "t", "x", "y", "z"], MonomialOrder::Lex);
+        let f: Vec<Poly<Rat>> = ["x - s - t", "y - s", "z - t"]
+            .iter()
+            .map(|t| crate::parse_poly(&ring, t).unwrap())
+            .collect();
+        // Sage's toy_buchberger.buchberger: G grows, B holds ordered pairs,
+        // the pair of smallest lcm goes first.
+        let mut g = f.clone();
+        let mut b: Vec<(usize, usize)> = (0..3)
+            .flat_map(|i| (0..3).filter(move |&j| j != i).map(move |j| (i, j)))
+            .collect();
+        let mut zeros = 0;
+        let lcm = |g: &[Poly<Rat>], (i, j): (usize, usize)| g[i].lm().unwrap().lcm(g[j].lm().unwrap());
+        while !b.is_empty() {
+            // Sage's select: the pair of smallest lcm.
+            let k = (0..b.len())
+                .min_by(|&p, &q| ring.cmp(&lcm(&g, b[p]), &lcm(&g, b[q])))
+                .unwrap();
+            let (i, j) = b.remove(k);
+            let (fi, fj) = (&g[i], &g[j]);
+            let l = lcm(&g, (i, j));
+            let si = fi.mul_term(&fi.lm().unwrap().quotient(&l).unwrap(), &fi.lc().unwrap().recip());
+            let sj = fj.mul_term(&fj.lm().unwrap().quotient(&l).unwrap(), &fj.lc().unwrap().recip());
+            let (_, h) = crate::poly::divide(&ring, &si.sub(&ring, &sj), &g);
+            if h.is_zero() {
+                zeros += 1;
+            } else {
+                b.extend((0..g.len()).map(|k| (k, g.len())));
+                g.push(h);
+            }
+        }
+        assert_eq!(zeros, 8);
+        let want = ["s - y", "t - z", "x - y - z"];
+        for algorithm in [Algorithm::Buchberger, Algorithm::F4] {
+            // Buchberger takes the inputs as given: without criteria the six
+            // pairs of f1, f2, f3 and x − y − z; with them only (f1, f2),
+            // four coprime pairs discarded (f1 leaves the basis when f2,
+            // of the same leading monomial, comes in). F4 reduces the
+            // inputs first (f1 becomes x − y − z): three coprime pairs.
+            let (none, with) = match algorithm {
+                Algorithm::Buchberger => ((6, 5, 0), (1, 0, 4)),
+                Algorithm::F4 => ((3, 3, 0), (0, 0, 3)),
+            };
+            for (criteria, (reduced, vanished, product)) in [(Criteria::NONE, none), (Criteria::default(), with)] {
+                let opts = GroebnerOptions {
+                    algorithm,
+                    method: Method::FractionFree,
+                    criteria,
+                    ..Default::default()
+                };
+                let (basis, st) = if algorithm == Algorithm::F4 {
+                    // Counted modulo a prime: F4's run over Q adds the
+                    // replays' and the check's work.
+                    let fp: Vec<Poly<crate::Fp>> = f
+                        .iter()
+                        .map(|p| p.map_coeffs(&ring, |c| crate::Fp::from_rat(c, 32003).unwrap()))
+                        .collect();
+                    let (b, st) = crate::f4::f4_modp(&ring, &fp, &opts).unwrap();
+                    (b.iter().map(|p| p.display(&ring)).collect::<Vec<_>>(), st)
+                } else {
+                    let r = groebner(&ring, &f, &opts).unwrap();
+                    (r.basis.iter().map(|p| p.display(&ring)).collect(), r.stats)
+                };
+                let mut basis = basis;
+                basis.sort();
+                let want: Vec<String> = if algorithm == Algorithm::F4 {
+                    ["s + 32002*y", "t + 32002*z", "x + 32002*y + 32002*z"]
+                        .map(String::from)
+                        .to_vec()
+                } else {
+                    want.map(String::from).to_vec()
+                };
+                assert_eq!(basis, want, "{algorithm:?} {criteria:?}");
+                assert_eq!(
+                    (
+                        st.pairs_reduced,
+                        st.zero_reductions,
+                        st.removed_product,
+                        st.removed_chain
+                    ),
+                    (reduced, vanished, product, 0),
+                    "{algorithm:?} {criteria:?}"
+                );
+            }
+        }
+    }
+
+    /// Switching criteria off changes the work, never the basis: katsura-4
+    /// and cyclic-4 over Q, every combination, both engines; the pairs
+    /// reduced only grow as criteria go.
+    #[test]
+    fn criteria_off_gives_the_same_basis() {
+        for (ring, polys) in [crate::systems::katsura(4), crate::systems::cyclic(4)] {
+            for algorithm in [Algorithm::Buchberger, Algorithm::F4] {
+                let run = |criteria| {
+                    let opts = GroebnerOptions {
+                        algorithm,
+                        method: Method::FractionFree,
+                        criteria,
+                        ..Default::default()
+                    };
+                    groebner(&ring, &polys, &opts).unwrap()
+                };
+                let all = run(Criteria::default());
+                let mut last = all.stats.pairs_reduced;
+                for criteria in [
+                    Criteria {
+                        product: true,
+                        chain: false,
+                    },
+                    Criteria {
+                        product: false,
+                        chain: true,
+                    },
+                    Criteria::NONE,
+                ] {
+                    let r = run(criteria);
+                    assert_eq!(r.basis, all.basis, "{algorithm:?} {criteria:?}");
+                    assert!(
+                        r.stats.pairs_reduced >= all.stats.pairs_reduced,
+                        "{algorithm:?} {criteria:?}"
+                    );
+                    if criteria == Criteria::NONE {
+                        assert!(r.stats.pairs_reduced > last, "{algorithm:?}");
+                        assert_eq!((r.stats.removed_product, r.stats.removed_chain), (0, 0));
+                    }
+                    last = last.max(r.stats.pairs_reduced);
+                }
+            }
+        }
     }
 
     #[test]

@@ -38,7 +38,7 @@ pub(crate) mod testing;
 
 pub use coeff::{Coeff, Domain, Field, Fp, Int, Rat};
 pub use groebner::{
-    groebner, Algorithm, Budget, GroebnerError, GroebnerOptions, GroebnerResult, Method, Stats, Strategy,
+    groebner, Algorithm, Budget, Criteria, GroebnerError, GroebnerOptions, GroebnerResult, Method, Stats, Strategy,
 };
 pub use implicit::{implicitize_groebner, Implicit, ImplicitError};
 pub use modular_f4::Verify;

@@ -9,8 +9,8 @@ use isoray_algebra::coeff::is_prime;
 use isoray_algebra::groebner::groebner_in;
 use isoray_algebra::implicit::implicitize_groebner;
 use isoray_algebra::{
-    groebner, parse_poly, Algorithm, Budget, Fp, GroebnerError, GroebnerOptions, ImplicitError, MonomialOrder,
-    ParseError, Poly, Rat, Ring, Verify,
+    groebner, parse_poly, Algorithm, Budget, Criteria, Fp, GroebnerError, GroebnerOptions, ImplicitError,
+    MonomialOrder, ParseError, Poly, Rat, Ring, Verify,
 };
 
 use crate::Failure;
@@ -82,6 +82,15 @@ pub struct GroebnerArgs {
     /// and input reduces to zero over Q).
     #[arg(long, default_value = "probabilistic")]
     pub verify: String,
+    /// Reduce every S-pair: neither the product (coprime leading
+    /// monomials) nor the chain criterion discards any (the thesis's
+    /// ablation; the basis is the same, the work grows).
+    #[arg(long)]
+    pub no_criteria: bool,
+    /// Keep the product criterion but not the chain criterion
+    /// (Gebauer–Möller's M, F and B_k).
+    #[arg(long)]
+    pub no_chain_criterion: bool,
     /// The generators (put `--` before them if one starts with `-`).
     pub polys: Vec<String>,
 }
@@ -191,6 +200,10 @@ pub fn cmd_groebner(args: &GroebnerArgs) -> Result<(), Failure> {
         progress: reporter(&bar),
         algorithm: if f4 { Algorithm::F4 } else { Algorithm::Buchberger },
         verify,
+        criteria: Criteria {
+            product: !args.no_criteria,
+            chain: !(args.no_criteria || args.no_chain_criterion),
+        },
         ..options(timeout)?
     };
     let done = || {

@@ -225,6 +225,33 @@ fn groebner_command() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(String::from_utf8_lossy(&o.stdout), "x - y - z\nt - z\ns - y\n");
     assert!(stderr(&o).contains("reductions to zero"), "{}", stderr(&o));
+    // The thesis's Example 1.3 counts: six pairs reduced without the
+    // criteria (five to zero), one with them; the same basis.
+    for (flags, counts) in [
+        (&["--no-criteria"][..], "pairs reduced: 6\nreductions to zero: 5\n"),
+        (&[][..], "pairs reduced: 1\nreductions to zero: 0\n"),
+    ] {
+        let o = run(isoray()
+            .args([
+                "groebner",
+                "--vars",
+                "s,t,x,y,z",
+                "--order",
+                "lex",
+                "--algorithm",
+                "buchberger",
+                "--stats",
+            ])
+            .args(flags)
+            .args(["--", "x - s - t", "y - s", "z - t"]));
+        assert_eq!(
+            String::from_utf8_lossy(&o.stdout),
+            "x - y - z\nt - z\ns - y\n",
+            "{}",
+            stderr(&o)
+        );
+        assert!(stderr(&o).contains(counts), "{flags:?}: {}", stderr(&o));
+    }
     // GF(7): 1/2 = 4 mod 7.
     let o = run(isoray().args(["groebner", "--vars", "x,y", "--field", "7", "2*x - 1", "y^2 - x"]));
     assert_eq!(String::from_utf8_lossy(&o.stdout), "x + 3\ny^2 + 3\n", "{}", stderr(&o));
