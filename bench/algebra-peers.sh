@@ -16,7 +16,7 @@ TIMEOUT=${TIMEOUT:-120}
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$ROOT"
 cases=("$@")
-[ ${#cases[@]} -gt 0 ] || cases=(katsura-6 katsura-7 katsura-8 katsura-9 cyclic-6 cyclic-7)
+[ ${#cases[@]} -gt 0 ] || cases=(katsura-6 katsura-7 katsura-8 katsura-9 cyclic-6 cyclic-7 eco-10 eco-11 noon-7 reimer-6)
 bench/install-peers.sh >&2
 cargo build --release -q -p isoray >&2
 MSOLVE=$(find bench/out/msolve-venv -path '*sage_wheels/bin/msolve' -type f | head -n1)

@@ -5,7 +5,10 @@ terms combined: msolve misreads uncombined input) for each peer.
   systems.py NAME FIELD DIR   writes DIR/NAME.{in,ms,sing,giac}
 
 NAME: katsura-N (N+1 variables x0..xN), cyclic-N (x1..xN), or one of the
-named systems below. FIELD: 0 (the rationals) or a prime.
+systems from the literature below (PoSSo / SymbolicData definitions):
+eco-N (Morgan's economics model, x1..xN), noon-N (Noonburg's neural
+network, x1..xN, coefficients scaled to integers), reimer-N (Reimer,
+x1..xN). FIELD: 0 (the rationals) or a prime.
 """
 import sys
 from collections import defaultdict
@@ -71,6 +74,55 @@ def cyclic(n):
     return names, polys
 
 
+def eco(n):
+    """(x_k + sum_{i=1}^{n-k-1} x_i x_{i+k}) x_n - k for k = 1..n-1, and
+    x_1 + ... + x_{n-1} + 1."""
+    names = [f"x{i}" for i in range(1, n + 1)]
+    x = lambda i: var(i - 1, n)
+    polys = []
+    for k in range(1, n):
+        p = x(k)
+        for i in range(1, n - k):
+            p = poly_add(p, poly_mul(x(i), x(i + k)))
+        polys.append(poly_add(poly_mul(p, x(n)), const(k, n), -1))
+    s = const(1, n)
+    for i in range(1, n):
+        s = poly_add(s, x(i))
+    polys.append(s)
+    return names, polys
+
+
+def noon(n):
+    """10 x_i (sum_{j != i} x_j^2) - 11 x_i + 10 for i = 1..n."""
+    names = [f"x{i}" for i in range(1, n + 1)]
+    x = lambda i: var(i - 1, n)
+    polys = []
+    for i in range(1, n + 1):
+        s = {}
+        for j in range(1, n + 1):
+            if j != i:
+                s = poly_add(s, poly_mul(x(j), x(j)))
+        p = poly_mul(poly_mul(const(10, n), x(i)), s)
+        p = poly_add(p, poly_mul(const(11, n), x(i)), -1)
+        polys.append(poly_add(p, const(10, n)))
+    return names, polys
+
+
+def reimer(n):
+    """2 sum_j (-1)^(j+1) x_j^(k+1) - 1 for k = 1..n."""
+    names = [f"x{i}" for i in range(1, n + 1)]
+    polys = []
+    for k in range(1, n + 1):
+        p = const(-1, n)
+        for j in range(1, n + 1):
+            t = const(2 if j % 2 == 1 else -2, n)
+            for _ in range(k + 1):
+                t = poly_mul(t, var(j - 1, n))
+            p = poly_add(p, t)
+        polys.append(p)
+    return names, polys
+
+
 def text(p, names):
     def term(m, c):
         mono = "*".join(f"{v}^{e}" if e > 1 else v for v, e in zip(names, m) if e)
@@ -95,6 +147,8 @@ def main():
         names, polys = katsura(int(n))
     elif kind == "cyclic":
         names, polys = cyclic(int(n))
+    elif kind in ("eco", "noon", "reimer"):
+        names, polys = {"eco": eco, "noon": noon, "reimer": reimer}[kind](int(n))
     else:
         sys.exit(f"systems.py: unknown system {name}")
     ps = [text(p, names) for p in polys]

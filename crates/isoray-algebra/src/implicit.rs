@@ -64,6 +64,26 @@ pub enum ImplicitError {
     /// Interpolation found no (verified) equation.
     #[error("interpolation failed: {0}")]
     Interpolation(String),
+    /// The parametrization has base points (parameter values where the
+    /// numerators and denominators vanish together) that make the auxiliary
+    /// resultant vanish identically (thesis Def. 1.53, Thm 1.14) or leave
+    /// extraneous factors in it that could not be removed.
+    #[error(
+        "the parametrization has base points ({points}), where the numerators and denominators vanish together; they make the auxiliary resultant vanish or leave extraneous factors in it, so implicitize by elimination instead (--method groebner)"
+    )]
+    BasePoints {
+        /// The base points found, or the equations that define them.
+        points: String,
+    },
+    /// The resultant method found no implicit equation.
+    #[error("resultant method: {0}")]
+    Resultant(String),
+    /// A method without Gröbner statistics ran out of time.
+    #[error("time limit of {limit:.1} s exceeded")]
+    TimeLimit {
+        /// The limit in seconds.
+        limit: f64,
+    },
     /// Interpolation was cancelled through its token.
     #[error("cancelled")]
     Cancelled,

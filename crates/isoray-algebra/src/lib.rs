@@ -31,6 +31,7 @@ pub mod monomial;
 pub mod parse;
 pub mod poly;
 pub mod resultant;
+pub mod surface_resultant;
 pub mod systems;
 
 #[cfg(test)]

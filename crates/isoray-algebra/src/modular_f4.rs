@@ -58,7 +58,7 @@ pub enum Verify {
 }
 
 /// The primes used for lifting: the largest below 2³¹, downwards.
-fn primes() -> impl Iterator<Item = u64> {
+pub(crate) fn primes() -> impl Iterator<Item = u64> {
     let mut p = 1u64 << 31;
     std::iter::from_fn(move || loop {
         p -= 1;

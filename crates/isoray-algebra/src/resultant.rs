@@ -85,6 +85,59 @@ pub fn resultant(ring: &Ring, f: &Poly<Rat>, g: &Poly<Rat>, v: usize) -> Poly<Ra
     determinant(ring, sylvester_matrix(ring, f, g, v))
 }
 
+/// Homogenizes f with respect to the variables `vars` using the variable `h`
+/// (thesis §1.7: ʰf = h^D·f(x/h)): every term c·m gets the factor
+/// h^(D − deg_vars m), where D is `degree` or, when `None`, the largest degree
+/// of a term in `vars`. `h` must not occur in f and must not be one of `vars`;
+/// a `degree` below the largest term degree is raised to it.
+pub fn homogenize(ring: &Ring, f: &Poly<Rat>, vars: &[usize], h: usize, degree: Option<u32>) -> Poly<Rat> {
+    let deg = |m: &Monomial| vars.iter().map(|&v| m.exp(v) as u32).sum::<u32>();
+    let top = f.terms().iter().map(|(m, _)| deg(m)).max().unwrap_or(0);
+    let d = degree.unwrap_or(top).max(top);
+    let terms = f
+        .terms()
+        .iter()
+        .map(|(m, c)| {
+            let mut e = m.exps().to_vec();
+            e[h] += (d - deg(m)) as u16;
+            (Monomial::new(&e), c.clone())
+        })
+        .collect();
+    Poly::from_terms(ring, terms)
+}
+
+/// The resultant of n + 1 polynomials of degree ≤ 1 in the n variables
+/// `vars` (thesis Thm 1.11): the determinant of their coefficient matrix,
+/// row i holding the constant term of `polys[i]` and then its coefficients of
+/// `vars` in order. Zero exactly when the linear system has a common solution
+/// (for coefficients in a field), or the polynomials are not of degree ≤ 1.
+/// Returns `None` when the count is not `vars.len() + 1` or a polynomial has a
+/// term of degree > 1 in `vars`.
+pub fn linear_resultant(ring: &Ring, polys: &[Poly<Rat>], vars: &[usize]) -> Option<Poly<Rat>> {
+    if polys.len() != vars.len() + 1 {
+        return None;
+    }
+    let mut rows = Vec::with_capacity(polys.len());
+    for f in polys {
+        let mut row = vec![Vec::new(); vars.len() + 1];
+        for (m, c) in f.terms() {
+            let used: Vec<usize> = (0..vars.len()).filter(|&k| m.exp(vars[k]) > 0).collect();
+            let col = match used.as_slice() {
+                [] => 0,
+                [k] if m.exp(vars[*k]) == 1 => k + 1,
+                _ => return None,
+            };
+            let mut e = m.exps().to_vec();
+            if col > 0 {
+                e[vars[col - 1]] = 0;
+            }
+            row[col].push((Monomial::new(&e), c.clone()));
+        }
+        rows.push(row.into_iter().map(|t| Poly::from_terms(ring, t)).collect());
+    }
+    Some(determinant(ring, rows))
+}
+
 /// Implicitizes a plane curve x = f₁/q₁, y = f₂/q₂ (in one parameter) by
 /// Res_t(q₁x − f₁, q₂y − f₂), as a primitive integer polynomial in (x, y).
 /// The resultant is a power of the implicit equation when the
@@ -126,6 +179,49 @@ mod tests {
         assert_eq!(resultant(&ring, &p("x^2 - 1"), &p("x - 1"), 0), p("0"));
         // Res(ax^2+bx+c, 2ax+b) = -a * discriminant: for x^2 - 3x + 2: -(9 - 8) = -1.
         assert_eq!(resultant(&ring, &p("x^2 - 3*x + 2"), &p("2*x - 3"), 0), p("-1"));
+    }
+
+    #[test]
+    fn linear_resultant_of_example_1_3() {
+        // Thesis Ex. 1.3: x = s + t, y = s, z = t; the auxiliary system
+        // s + t − x, s − y, t − z has coefficient matrix [[−x, 1, 1], [−y, 1, 0], [−z, 0, 1]]
+        // whose determinant is −x + y + z.
+        let ring = Ring::new(&["s", "t", "x", "y", "z"], MonomialOrder::DegRevLex);
+        let p = |s: &str| parse_poly(&ring, s).unwrap();
+        let polys = [p("s + t - x"), p("s - y"), p("t - z")];
+        assert_eq!(linear_resultant(&ring, &polys, &[0, 1]), Some(p("-x + y + z")));
+        // The same determinant written out.
+        let m = vec![
+            vec![p("-x"), p("1"), p("1")],
+            vec![p("-y"), p("1"), p("0")],
+            vec![p("-z"), p("0"), p("1")],
+        ];
+        assert_eq!(determinant(&ring, m), p("-x + y + z"));
+        // Not linear, or the wrong count: no linear resultant.
+        assert_eq!(
+            linear_resultant(&ring, &[p("s^2 - x"), p("s - y"), p("t")], &[0, 1]),
+            None
+        );
+        assert_eq!(
+            linear_resultant(&ring, &[p("s*t - x"), p("s - y"), p("t")], &[0, 1]),
+            None
+        );
+        assert_eq!(linear_resultant(&ring, &[p("s - y"), p("t")], &[0, 1]), None);
+    }
+
+    #[test]
+    fn homogenization() {
+        let ring = Ring::new(&["s", "t", "u"], MonomialOrder::DegRevLex);
+        let p = |s: &str| parse_poly(&ring, s).unwrap();
+        assert_eq!(
+            homogenize(&ring, &p("s^2 + t + 1"), &[0, 1], 2, None),
+            p("s^2 + t*u + u^2")
+        );
+        assert_eq!(homogenize(&ring, &p("s - 1"), &[0, 1], 2, Some(3)), p("s*u^2 - u^3"));
+        // Dehomogenizing (u = 1) gives f back.
+        let f = p("3*s^3*t - s*t + 7");
+        let h = homogenize(&ring, &f, &[0, 1], 2, None);
+        assert_eq!(h.substitute(&ring, &[None, None, Some(p("1"))]), f);
     }
 
     #[test]

@@ -265,9 +265,9 @@ pub fn cmd_implicitize(
     stats: bool,
     timeout: Option<f64>,
 ) -> Result<(), Failure> {
-    if !matches!(method, "auto" | "groebner" | "interpolation") {
+    if !matches!(method, "auto" | "groebner" | "interpolation" | "resultant") {
         return Err(bad(format!(
-            "--method: expected auto, groebner or interpolation, found `{method}`"
+            "--method: expected auto, groebner, interpolation or resultant, found `{method}`"
         )));
     }
     let coords: Vec<&str> = match z {
@@ -300,6 +300,15 @@ pub fn cmd_implicitize(
     let result = match method {
         "groebner" => implicitize_groebner(&coords, &params, &opts),
         "interpolation" => interp(opts.budget.time),
+        "resultant" => isoray_algebra::surface_resultant::implicitize_resultant(
+            &coords,
+            &params,
+            &isoray_algebra::surface_resultant::ResultantOptions {
+                time: opts.budget.time,
+                interrupt: Some(crate::jobs::cancel_token()),
+                progress: reporter(&bar),
+            },
+        ),
         _ => {
             // Elimination first, with a few seconds; interpolation for what it cannot finish.
             let quick = Duration::from_secs(5).min(opts.budget.time.unwrap_or(Duration::MAX));
@@ -338,6 +347,12 @@ pub fn cmd_implicitize(
             code: 1,
             message: e.to_string(),
         }),
+        Err(e @ (ImplicitError::TimeLimit { .. } | ImplicitError::BasePoints { .. } | ImplicitError::Resultant(_))) => {
+            Err(Failure {
+                code: 1,
+                message: e.to_string(),
+            })
+        }
         Err(e) => Err(bad(e.to_string())),
     }
 }

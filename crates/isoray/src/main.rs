@@ -274,7 +274,8 @@ enum Command {
         /// Parameters (default s,t for surfaces, t for curves).
         #[arg(long, value_delimiter = ',')]
         params: Option<Vec<String>>,
-        /// auto (elimination, then interpolation if it takes too long), groebner or interpolation.
+        /// auto (elimination, then interpolation if it takes too long), groebner,
+        /// interpolation or resultant (the Dixon resultant; stops at base points it cannot handle).
         #[arg(long, default_value = "auto")]
         method: String,
         /// Print statistics to stderr.

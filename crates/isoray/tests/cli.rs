@@ -288,6 +288,41 @@ fn implicitize_command() {
     let o = run(isoray().args(["implicitize", "--x", "s+x", "--y", "s", "--z", "t"]));
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("uses the variable `x`"), "{}", stderr(&o));
+    // By resultant: the issue-18 surface (distinct denominators) equals
+    // the elimination answer; base points are reported, exit 1.
+    let args = ["--x", "(s+t^2)/(t+1)", "--y", "(s^2-t)/(s+2)", "--z", "(s*t)/(s-t+1)"];
+    same_as_groebner(&args, "resultant");
+    let o = run(isoray().args([
+        "implicitize",
+        "--method",
+        "resultant",
+        "--x",
+        "s/(s^2+t^2)",
+        "--y",
+        "t/(s^2+t^2)",
+        "--z",
+        "s*t/(s^2+t^2)",
+    ]));
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("base points") && stderr(&o).contains("(0, 0)"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// `isoray implicitize ARGS --method METHOD` succeeds with the output of
+/// `--method groebner`.
+fn same_as_groebner(args: &[&str], method: &str) {
+    let a = run(isoray().arg("implicitize").args(args).args(["--method", method]));
+    let b = run(isoray().arg("implicitize").args(args).args(["--method", "groebner"]));
+    assert!(
+        a.status.success() && b.status.success(),
+        "{} {}",
+        stderr(&a),
+        stderr(&b)
+    );
+    assert_eq!(a.stdout, b.stdout, "{method}");
 }
 
 #[test]
@@ -300,18 +335,7 @@ fn implicitize_by_interpolation_agrees_with_elimination() {
         "--z",
         "s^2*t^2 + s*t + s",
     ];
-    let a = run(isoray()
-        .arg("implicitize")
-        .args(args)
-        .args(["--method", "interpolation"]));
-    let b = run(isoray().arg("implicitize").args(args).args(["--method", "groebner"]));
-    assert!(
-        a.status.success() && b.status.success(),
-        "{} {}",
-        stderr(&a),
-        stderr(&b)
-    );
-    assert_eq!(a.stdout, b.stdout);
+    same_as_groebner(&args, "interpolation");
     let o = run(isoray().args(["implicitize", "--method", "fourier", "--x", "s", "--y", "t", "--z", "s"]));
     assert_eq!(o.status.code(), Some(2));
 }

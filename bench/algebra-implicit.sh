@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Implicitization beside Singular's eliminate (issue 18): the documented
+# surfaces and ten random rational parametrizations (fixed seed, degrees 1
+# to 3, a different denominator per coordinate) from
+# bench/algebra/implicit.py. Each program runs once per case in its own
+# process, single-threaded (RAYON_NUM_THREADS=1); wall seconds and peak RSS
+# from /usr/bin/time, a timeout per run (TIMEOUT, default 120 s). isoray runs
+# --method resultant and --method groebner; every answer is compared exactly
+# (equal up to a rational factor) with Singular's generator of the
+# elimination ideal, or, where Singular timed out, with the other isoray
+# method's.
+#
+#   bench/algebra-implicit.sh
+#   TIMEOUT=600 bench/algebra-implicit.sh
+set -euo pipefail
+TIMEOUT=${TIMEOUT:-120}
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$ROOT"
+bench/install-peers.sh >&2
+cargo build --release -q -p isoray >&2
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/isoray-implicit.XXXXXX")
+trap 'rm -rf "$TMP"' EXIT
+cp target/release/isoray "$TMP/isoray"
+export RAYON_NUM_THREADS=1
+
+# run NAME CMD...: "seconds|MiB" ("> T s|—" past TIMEOUT), output in $TMP/NAME.out
+run() {
+  local name="$1"; shift
+  local rc=0
+  timeout "$TIMEOUT" /usr/bin/time -f '%e %M' -o "$TMP/$name.time" "$@" </dev/null >"$TMP/$name.out" 2>"$TMP/$name.err" || rc=$?
+  if [ "$rc" = 124 ]; then echo "> $TIMEOUT s|—"; return; fi
+  if [ "$rc" != 0 ]; then echo "failed ($rc)|—"; return; fi
+  awk '{ printf "%.2f|%.0f", $1, $2 / 1024 }' "$TMP/$name.time"
+}
+num() { [[ $1 =~ ^[0-9.]+$ ]]; }
+ratio() { num "$1" && num "$2" && awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a / (b > 0.005 ? b : 0.005) }' || echo "—"; }
+
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), commit $(git rev-parse --short HEAD), $(date -u '+%Y-%m-%d'), one thread each"
+echo "peer: $(Singular --version 2>&1 | grep -m1 -o 'version [0-9.]*' || true) (Singular, eliminate)"
+echo
+echo "| case | parametrization | isoray resultant s | isoray groebner s | Singular s | resultant / Singular | peak MiB resultant / groebner / Singular | exact check |"
+echo "|---|---|---|---|---|---|---|---|"
+python3 bench/algebra/implicit.py cases "$TMP" | while IFS='|' read -r name x y z; do
+  IFS='|' read -r rt rm <<<"$(run res "$TMP/isoray" implicitize --method resultant --x "$x" --y "$y" --z "$z")"
+  IFS='|' read -r gt gm <<<"$(run gro "$TMP/isoray" implicitize --method groebner --x "$x" --y "$y" --z "$z")"
+  IFS='|' read -r st sm <<<"$(run sing Singular -q --no-rc "$TMP/$name.sing")"
+  check=""
+  ref=""
+  refname=""
+  if num "$st"; then ref="$TMP/sing.out"; refname=Singular; elif num "$gt"; then ref="$TMP/gro.out"; refname=groebner; fi
+  for m in res gro; do
+    t=$([ $m = res ] && echo "$rt" || echo "$gt")
+    label=$([ $m = res ] && echo resultant || echo groebner)
+    if ! num "$t"; then continue; fi
+    if [ -z "$ref" ]; then check+="$label: no reference; "; continue; fi
+    if [ "$ref" = "$TMP/$m.out" ]; then continue; fi
+    if python3 bench/algebra/implicit.py same "$TMP/$m.out" "$ref"; then check+="$label = $refname; "; else check+="$label DIFFERS; "; fi
+  done
+  echo "| $name | \`$x, $y, $z\` | $rt | $gt | $st | $(ratio "$rt" "$st") | $rm / $gm / $sm | ${check%; } |"
+done
