@@ -7,6 +7,12 @@ comparison of two implicit equations.
   implicit.py same A B        exit 0 when the polynomials in files A and B
                               (isoray's and Singular's printed forms, in
                               x, y, z) are equal up to a rational factor
+  implicit.py vanishes A X Y Z
+                              exit 0 when the polynomial in file A vanishes,
+                              in exact rational arithmetic, at the images of
+                              eight random rational points (s, t) (where no
+                              peer gives a reference: a Schwartz–Zippel
+                              check, not a proof)
 
 The cases: the surfaces documented in docs/ALGEBRA.md and issue 18, then ten
 random rational parametrizations (fixed seed) of degrees 1 to 3 in s, t
@@ -117,16 +123,38 @@ def same(a, b):
     return all(pa[m] == r * pb[m] for m in pa)
 
 
+def vanishes(path, coords, points=8, seed=7):
+    p = parse(open(path).read())
+    if not p:
+        return False
+    rng = random.Random(seed)
+    done = 0
+    while done < points:
+        env = {"s": Fraction(rng.randint(-50, 50), rng.randint(1, 50)),
+               "t": Fraction(rng.randint(-50, 50), rng.randint(1, 50))}
+        try:
+            xyz = [eval(c.replace("^", "**"), {"__builtins__": {}}, env) for c in coords]
+        except ZeroDivisionError:
+            continue
+        value = sum(c * xyz[0] ** a * xyz[1] ** b * xyz[2] ** e for (a, b, e), c in p.items())
+        if value != 0:
+            return False
+        done += 1
+    return True
+
+
 def main():
     if sys.argv[1] == "cases":
         for name, x, y, z in DOCUMENTED + random_cases():
             with open(f"{sys.argv[2]}/{name}.sing", "w") as f:
                 f.write(singular_script(x, y, z))
             print(f"{name}|{x}|{y}|{z}")
+    elif sys.argv[1] == "vanishes":
+        sys.exit(0 if vanishes(sys.argv[2], sys.argv[3:6]) else 1)
     elif sys.argv[1] == "same":
         sys.exit(0 if same(sys.argv[2], sys.argv[3]) else 1)
     else:
-        sys.exit("implicit.py: cases DIR | same A B")
+        sys.exit("implicit.py: cases DIR | same A B | vanishes A X Y Z")
 
 
 if __name__ == "__main__":
