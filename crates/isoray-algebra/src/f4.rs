@@ -453,7 +453,7 @@ impl<'r> F4<'r> {
     /// Symbolic preprocessing: for every monomial of `rows` (with `leads`
     /// false, but their leading ones) and of the reducers found, a reducer
     /// row (a multiple of an alive element with that leading monomial).
-    fn preprocess(&mut self, rows: &[Row], leads: bool) -> Vec<Row> {
+    fn preprocess(&mut self, rows: &[Row], leads: bool) -> Result<Vec<Row>, GroebnerError> {
         let skip = usize::from(!leads);
         let mut done: FxHashSet<u32> = FxHashSet::default();
         if !leads {
@@ -461,9 +461,14 @@ impl<'r> F4<'r> {
         }
         let mut todo: Vec<u32> = rows.iter().flat_map(|r| r.mons[skip..].iter().copied()).collect();
         let mut reducers = Vec::new();
+        let mut seen = 0u32;
         while let Some(m) = todo.pop() {
             if !done.insert(m) {
                 continue;
+            }
+            seen = seen.wrapping_add(1);
+            if seen % 4096 == 0 {
+                self.check()?;
             }
             if let Some(g) = self.divisor(m) {
                 let q = self.lead[g].quotient(&self.table.monos[m as usize]).expect("divides");
@@ -472,7 +477,7 @@ impl<'r> F4<'r> {
                 reducers.push(r);
             }
         }
-        reducers
+        Ok(reducers)
     }
 
     /// The columns of `rows` (all their monomials) in descending order, and
@@ -694,7 +699,7 @@ impl<'r> F4<'r> {
     /// One matrix: the pair rows `rows` and their reducers. Returns the
     /// new elements' rows, largest leading monomial first.
     fn matrix(&mut self, rows: Vec<Row>) -> Result<Vec<Row>, GroebnerError> {
-        let reducers = self.preprocess(&rows, false);
+        let reducers = self.preprocess(&rows, false)?;
         let (order, col_of) = self.columns(rows.iter().chain(&reducers));
         let mut piv = vec![NONE; order.len()];
         let mut store: Vec<MatRow> = Vec::with_capacity(reducers.len() + rows.len());
@@ -754,7 +759,7 @@ impl<'r> F4<'r> {
                 .map(|&m| self.table.monos[m as usize].degree())
                 .max()
                 .unwrap_or(0);
-            let reducers = self.preprocess(std::slice::from_ref(&row), true);
+            let reducers = self.preprocess(std::slice::from_ref(&row), true)?;
             let (order, col_of) = self.columns(std::iter::once(&row).chain(&reducers));
             let mut piv = vec![NONE; order.len()];
             let mut store = Vec::new();
@@ -805,6 +810,7 @@ impl<'r> F4<'r> {
                 }
             }
             for r in self.matrix(rows)? {
+                self.check()?;
                 self.insert(r, d, true);
             }
             done += now.len() as u64;
@@ -822,7 +828,7 @@ impl<'r> F4<'r> {
             .filter(|&g| self.alive[g])
             .map(|g| self.basis[g].clone())
             .collect();
-        let reducers = self.preprocess(&alive, false);
+        let reducers = self.preprocess(&alive, false)?;
         let (order, col_of) = self.columns(alive.iter().chain(&reducers));
         let mut piv = vec![NONE; order.len()];
         let mut store = Vec::new();

@@ -98,3 +98,30 @@ fn resultant_cross_checks_groebner_for_plane_curves() {
         );
     }
 }
+
+/// F4 elimination keeps to its time budget on a case of minutes (cubic
+/// numerators, a denominator per coordinate: symbolic preprocessing of
+/// large matrices is checked too), and stops with the budget error.
+#[test]
+fn f4_elimination_keeps_its_time_budget() {
+    let opts = GroebnerOptions {
+        budget: isoray_algebra::Budget {
+            time: Some(std::time::Duration::from_millis(300)),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let start = std::time::Instant::now();
+    let r = implicitize_groebner(
+        &[
+            "(-2*s^2*t-2)/(-1*s-3)",
+            "(-2*s^3-1*s^2*t)/(-2*s+1)",
+            "(-1*s^3+1*s*t^2)/(2*t+2)",
+        ],
+        &["s", "t"],
+        &opts,
+    );
+    let took = start.elapsed();
+    assert!(matches!(r, Err(ImplicitError::Groebner(_))), "{r:?}");
+    assert!(took.as_secs_f64() < 2.0, "stopped after {took:?}");
+}

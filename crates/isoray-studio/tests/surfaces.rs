@@ -327,9 +327,10 @@ fn the_preview_shows_the_surface_alone() {
 
 #[test]
 fn a_slow_implicitization_can_be_cancelled() {
-    // Distinct denominators in each coordinate: seconds of elimination.
+    // Cubic numerators, a distinct denominator in each coordinate: minutes
+    // of elimination (random-9 of bench/algebra-implicit.sh).
     let slow = r#"[surface.slow]
-parametric = { x = "(s+t^2)/(t+1)", y = "(s^2-t)/(s+2)", z = "(s*t)/(s-t+1)" }
+parametric = { x = "(-2*s^2*t-2)/(-1*s-3)", y = "(-2*s^3-1*s^2*t)/(-2*s+1)", z = "(-1*s^3+1*s*t^2)/(2*t+2)" }
 domain = { s = [-0.5, 0.5], t = [-0.5, 0.5] }
 
 [[object]]
