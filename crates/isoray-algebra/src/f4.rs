@@ -311,6 +311,8 @@ struct F4<'r> {
     next_id: u32,
     /// The matrices recorded, when learning a trace.
     rec: Option<Vec<Step>>,
+    /// `F4_DEBUG` is set: print every matrix's statistics.
+    debug: bool,
 }
 
 impl<'r> F4<'r> {
@@ -331,6 +333,7 @@ impl<'r> F4<'r> {
             pairs: Vec::new(),
             next_id: 0,
             rec: None,
+            debug: std::env::var_os("F4_DEBUG").is_some(),
         }
     }
 
@@ -718,7 +721,7 @@ impl<'r> F4<'r> {
         let t0 = Instant::now();
         let (nred, ntodo, steps0) = (store.len(), todo.len(), self.stats.reduction_steps);
         let results = self.echelon(order.len(), &mut piv, &mut store, todo, false)?;
-        if std::env::var_os("F4_DEBUG").is_some() {
+        if self.debug {
             let nnz: usize = store[..nred].iter().map(|r| r.cols.len()).sum();
             eprintln!(
                 "matrix {} pivots ({} nnz) + {} rows x {} cols: {} steps, {} new, {:.1} ms",

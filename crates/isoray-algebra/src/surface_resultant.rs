@@ -81,6 +81,7 @@ use num_traits::{One, ToPrimitive, Zero};
 use rayon::prelude::*;
 
 use crate::coeff::{to_zint, Int, Rat, ZInt};
+use crate::f4::inv_mod;
 use crate::groebner::{groebner, Algorithm, Budget, GroebnerOptions, Stats};
 use crate::implicit::{coordinate_names, parse_parametrization, Implicit, ImplicitError};
 use crate::modular::Reconstructor;
@@ -291,15 +292,9 @@ fn powm(mut b: u64, mut e: u64, p: u64) -> u64 {
     r
 }
 
-fn invm(a: u64, p: u64) -> u64 {
-    powm(a, p - 2, p)
-}
-
+/// c modulo p, None when p divides its denominator.
 fn rat_mod(c: &Rat, p: u64) -> Option<u64> {
-    let pm = Int::from(p);
-    let n = c.numer().mod_floor(&pm).to_u64()?;
-    let d = c.denom().mod_floor(&pm).to_u64()?;
-    (d != 0).then(|| n * invm(d, p) % p)
+    crate::coeff::Fp::from_rat(c, p).map(|v| v.value())
 }
 
 /// A deterministic xorshift generator.
@@ -341,7 +336,7 @@ fn det_mod(a: &mut [u64], n: usize, p: u64) -> u64 {
         }
         let piv = a[c * n + c];
         det = det * piv % p;
-        let inv = invm(piv, p);
+        let inv = inv_mod(piv, p);
         for r in c + 1..n {
             let f = a[r * n + c] * inv % p;
             if f != 0 {
@@ -370,7 +365,7 @@ fn pivot_columns(mut a: Vec<u64>, rows: usize, cols: usize, p: u64) -> Vec<usize
                 a.swap(r * cols + k, row * cols + k);
             }
         }
-        let inv = invm(a[row * cols + c], p);
+        let inv = inv_mod(a[row * cols + c], p);
         let (top, rest) = a.split_at_mut((row + 1) * cols);
         let prow = &top[row * cols..];
         rest.par_chunks_mut(cols).for_each(|other| {
@@ -402,7 +397,7 @@ fn monic(a: UPoly, p: u64) -> UPoly {
     match a.last() {
         None => a,
         Some(&lc) => {
-            let inv = invm(lc, p);
+            let inv = inv_mod(lc, p);
             a.into_iter().map(|c| c * inv % p).collect()
         }
     }
@@ -412,7 +407,7 @@ fn monic(a: UPoly, p: u64) -> UPoly {
 fn urem(a: &[u64], b: &[u64], p: u64) -> UPoly {
     let mut r = trim(a.to_vec());
     let db = b.len() - 1;
-    let inv = invm(b[db], p);
+    let inv = inv_mod(b[db], p);
     while r.len() > db {
         let dr = r.len() - 1;
         let f = r[dr] * inv % p;
@@ -432,7 +427,7 @@ fn udiv(a: &[u64], b: &[u64], p: u64) -> UPoly {
     if r.len() <= db {
         return Vec::new();
     }
-    let inv = invm(b[db], p);
+    let inv = inv_mod(b[db], p);
     let mut q = vec![0u64; r.len() - db];
     while r.len() > db {
         let dr = r.len() - 1;
@@ -561,7 +556,7 @@ impl Interpolator {
             *row = (0..n)
                 .map(|i| {
                     if i >= j {
-                        invm((xs[i] + p - xs[i - j]) % p, p)
+                        inv_mod((xs[i] + p - xs[i - j]) % p, p)
                     } else {
                         0
                     }
@@ -653,7 +648,7 @@ impl ParamMod {
             if w == 0 {
                 return None;
             }
-            *o = eval2(&self.num[i], s, t, p) * invm(w, p) % p;
+            *o = eval2(&self.num[i], s, t, p) * inv_mod(w, p) % p;
         }
         Some(out)
     }
@@ -1789,7 +1784,7 @@ fn surface(funcs: &[RatFunc], params: &[&str], out_ring: &Ring, guard: &Guard) -
             unlucky += 1;
             continue;
         }
-        let inv = invm(lc, p);
+        let inv = inv_mod(lc, p);
         let vals: Vec<u64> = mons.iter().map(|e| image[at(e)] * inv % p).collect();
         used += 1;
         // Chinese remaindering.
@@ -1798,7 +1793,7 @@ fn surface(funcs: &[RatFunc], params: &[&str], out_ring: &Ring, guard: &Guard) -
             modulus = Int::from(p);
         } else {
             let pm = Int::from(p);
-            let minv = invm((&modulus % &pm).to_u64().expect("below p"), p);
+            let minv = inv_mod((&modulus % &pm).to_u64().expect("below p"), p);
             for (r, &v) in residues.iter_mut().zip(&vals) {
                 let rp = (&*r % &pm).to_u64().expect("below p");
                 let t = (v + p - rp) % p * minv % p;
