@@ -31,7 +31,11 @@ pub enum FglmError {
 
 /// The standard monomials (those not divisible by any leading monomial) of a
 /// zero-dimensional Gröbner basis, in increasing order.
-pub fn standard_monomials(ring: &Ring, basis: &[Poly<Rat>], limit: usize) -> Result<Vec<Monomial>, FglmError> {
+pub fn standard_monomials<C: crate::coeff::Coeff>(
+    ring: &Ring,
+    basis: &[Poly<C>],
+    limit: usize,
+) -> Result<Vec<Monomial>, FglmError> {
     let n = ring.nvars();
     let lms: Vec<&Monomial> = basis.iter().filter_map(|p| p.lm()).collect();
     for i in 0..n {

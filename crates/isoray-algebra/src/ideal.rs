@@ -45,7 +45,7 @@ pub fn product(
 }
 
 /// A ring with one new variable in front (named to avoid clashes) and the
-/// block order eliminating it; and the embedding map of the old variables.
+/// elimination order of [`MonomialOrder::elimination`]; and the embedding map of the old variables.
 fn with_front_var(ring: &Ring, base: &str) -> (Ring, Vec<usize>) {
     let mut name = base.to_string();
     while ring.index_of(&name).is_some() {
@@ -53,7 +53,7 @@ fn with_front_var(ring: &Ring, base: &str) -> (Ring, Vec<usize>) {
     }
     let mut vars = vec![name];
     vars.extend(ring.vars().iter().cloned());
-    let big = Ring::new(&vars, MonomialOrder::Block(vec![1, ring.nvars()]));
+    let big = Ring::new(&vars, MonomialOrder::elimination(1, ring.nvars()));
     (big, (1..=ring.nvars()).collect())
 }
 
@@ -79,7 +79,8 @@ fn project(k: usize, ring: &Ring, basis: &[Poly<Rat>]) -> Vec<Poly<Rat>> {
 
 /// The elimination ideal I ∩ Q[remaining variables], as a reduced basis in
 /// `ring` (which keeps the eliminated variables; its elements do not use them).
-/// Uses a block order with the eliminated variables first, grevlex inside blocks.
+/// Uses the elimination order of [`MonomialOrder::elimination`], the
+/// eliminated variables first.
 pub fn eliminate(
     ring: &Ring,
     gens: &[Poly<Rat>],
@@ -91,7 +92,7 @@ pub fn eliminate(
     perm.extend((0..n).filter(|i| !vars.contains(i)));
     let names: Vec<String> = perm.iter().map(|&i| ring.vars()[i].clone()).collect();
     let k = vars.len();
-    let big = Ring::new(&names, MonomialOrder::Block(vec![k, n - k]));
+    let big = Ring::new(&names, MonomialOrder::elimination(k, n - k));
     // Old index i goes to position of i in perm.
     let mut map = vec![0; n];
     for (pos, &i) in perm.iter().enumerate() {

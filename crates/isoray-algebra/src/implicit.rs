@@ -210,7 +210,7 @@ pub fn implicitize_groebner(
     }
     let k = vars.len();
     vars.extend(names.iter().map(|s| s.to_string()));
-    let ring = Ring::new(&vars, MonomialOrder::Block(vec![k, names.len()]));
+    let ring = Ring::new(&vars, MonomialOrder::elimination(k, names.len()));
     let pmap: Vec<usize> = (0..np).collect();
     let pr = Ring::new(params, MonomialOrder::DegRevLex);
     let lift = |p: &Poly<Rat>| p.embed(&ring, &pmap);

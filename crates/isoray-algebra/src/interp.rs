@@ -39,11 +39,15 @@ pub struct InterpolationOptions {
     /// stage and equals `total` when a stage completes (a verification that
     /// fails stops short).
     pub progress: Option<Arc<dyn Progress + Send>>,
+    /// A degree to try first (measured, as `--method auto` does, or known):
+    /// if its nullspace is not one-dimensional, degrees 1, 2, … follow.
+    pub degree_hint: Option<u32>,
 }
 
 impl Default for InterpolationOptions {
     fn default() -> Self {
         InterpolationOptions {
+            degree_hint: None,
             max_degree: 24,
             time: None,
             interrupt: None,
@@ -59,6 +63,7 @@ impl std::fmt::Debug for InterpolationOptions {
             .field("time", &self.time)
             .field("interrupt", &self.interrupt)
             .field("progress", &self.progress.is_some())
+            .field("degree_hint", &self.degree_hint)
             .finish()
     }
 }
@@ -258,7 +263,10 @@ pub fn implicitize_interpolation(
     };
     // A known bound is tried first; if its nullspace is not one-dimensional the
     // true degree is lower, and degrees are tried in increasing order.
-    let bound = degree_bound(&funcs, np).filter(|&b| b <= opts.max_degree);
+    let bound = opts
+        .degree_hint
+        .or_else(|| degree_bound(&funcs, np))
+        .filter(|&b| (1..=opts.max_degree).contains(&b));
     let order: Vec<u32> = bound
         .into_iter()
         .chain((1..=opts.max_degree).filter(|d| Some(*d) != bound))

@@ -17,6 +17,7 @@
 //! assert_eq!(text, ["y^2 - 1/2", "x - y"]);
 //! ```
 
+pub mod auto;
 pub mod coeff;
 pub mod f4;
 pub mod fglm;

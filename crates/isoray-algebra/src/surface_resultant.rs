@@ -205,6 +205,17 @@ fn divided_difference(ring: &Ring, p: &Poly<Rat>, v: usize, w: usize) -> Poly<Ra
 /// For the auxiliary system of thesis Ex. 1.3 (s + t − x, s − y, t − z) it is
 /// the 1 × 1 matrix [−x + y + z].
 pub fn dixon_matrix(ring: &Ring, polys: &[Poly<Rat>; 3], coeff_ring: &Ring) -> DixonMatrix {
+    dixon_matrix_checked(ring, polys, coeff_ring, &|| Ok(())).expect("no check fails")
+}
+
+/// [`dixon_matrix`], calling `check` between the products (so that a
+/// large Dixon polynomial can be cancelled or stopped by a time limit).
+fn dixon_matrix_checked(
+    ring: &Ring,
+    polys: &[Poly<Rat>; 3],
+    coeff_ring: &Ring,
+    check: &dyn Fn() -> Result<(), ImplicitError>,
+) -> Result<DixonMatrix, ImplicitError> {
     let k = coeff_ring.nvars();
     debug_assert_eq!(ring.nvars(), k + 2);
     let mut names: Vec<String> = vec!["s".into(), "t".into(), "α".into(), "β".into()];
@@ -229,11 +240,17 @@ pub fn dixon_matrix(ring: &Ring, polys: &[Poly<Rat>; 3], coeff_ring: &Ring) -> D
         polys.iter().map(|f| f.embed(&work, &ab)).collect(),
     ];
     let m = |i: usize, j: usize| &rows[i][j];
-    let minor = |a: usize, b: usize| m(1, a).mul(&work, m(2, b)).sub(&work, &m(1, b).mul(&work, m(2, a)));
+    let minor = |a: usize, b: usize| -> Result<Poly<Rat>, ImplicitError> {
+        check()?;
+        Ok(m(1, a).mul(&work, m(2, b)).sub(&work, &m(1, b).mul(&work, m(2, a))))
+    };
+    let (m12, m02, m01) = (minor(1, 2)?, minor(0, 2)?, minor(0, 1)?);
+    check()?;
     let delta = m(0, 0)
-        .mul(&work, &minor(1, 2))
-        .sub(&work, &m(0, 1).mul(&work, &minor(0, 2)))
-        .add(&work, &m(0, 2).mul(&work, &minor(0, 1)));
+        .mul(&work, &m12)
+        .sub(&work, &m(0, 1).mul(&work, &m02))
+        .add(&work, &m(0, 2).mul(&work, &m01));
+    check()?;
     let mut cells: BTreeMap<DixonCell, Vec<(Monomial, Rat)>> = BTreeMap::new();
     for (mono, c) in delta.terms() {
         let e = mono.exps();
@@ -254,11 +271,11 @@ pub fn dixon_matrix(ring: &Ring, polys: &[Poly<Rat>; 3], coeff_ring: &Ring) -> D
         let j = col_keys.binary_search(&c).expect("a column key");
         entries[i][j] = Poly::from_terms(coeff_ring, terms);
     }
-    DixonMatrix {
+    Ok(DixonMatrix {
         rows: row_keys,
         cols: col_keys,
         entries,
-    }
+    })
 }
 
 /// The auxiliary system Fᵢ = Xᵢ − xᵢ·Wᵢ in the ring (s, t, x, y, z).
@@ -965,8 +982,16 @@ fn dixon_work(polys: &[Poly<Rat>; 3]) -> usize {
         .product()
 }
 
+/// [`dixon_work`] of the auxiliary system of a parametrization of a surface.
+pub(crate) fn dixon_work_of(funcs: &[RatFunc]) -> usize {
+    dixon_work(&auxiliary_system(funcs).1)
+}
+
 /// Variants beyond the first whose Dixon polynomial would cost more are skipped.
 const MAX_DIXON_WORK: usize = 4_000_000;
+
+/// The first Dixon polynomial is not computed past this work (minutes).
+const MAX_FIRST_DIXON_WORK: usize = 400_000_000;
 
 /// How many parametrization variants may be tried.
 const VARIANTS: usize = 6;
@@ -1262,11 +1287,17 @@ fn make_plan(funcs: &[RatFunc], params: &[&str], p: u64, rng: &mut Rng, guard: &
         guard.update(k, VARIANTS);
         let (vf, transform) = variant(funcs, k, guard)?;
         let (ring, polys) = auxiliary_system(&vf);
-        if k > 0 && dixon_work(&polys) > MAX_DIXON_WORK {
+        let work = dixon_work(&polys);
+        if k == 0 && work > MAX_FIRST_DIXON_WORK {
+            return Err(ImplicitError::Resultant(format!(
+                "the Dixon polynomial is too large (estimated work {work}, limit {MAX_FIRST_DIXON_WORK}); try --method interpolation or groebner"
+            )));
+        }
+        if k > 0 && work > MAX_DIXON_WORK {
             guard.update(k + 1, VARIANTS);
             continue;
         }
-        let dm = dixon_matrix(&ring, &polys, &coeff_ring);
+        let dm = dixon_matrix_checked(&ring, &polys, &coeff_ring, &|| guard.check())?;
         guard.update(k + 1, VARIANTS);
         let Some(minor) = select_minor(&dm, transform, p, rng) else {
             continue;

@@ -99,9 +99,10 @@ fn resultant_cross_checks_groebner_for_plane_curves() {
     }
 }
 
-/// F4 elimination keeps to its time budget on a case of minutes (cubic
-/// numerators, a denominator per coordinate: symbolic preprocessing of
-/// large matrices is checked too), and stops with the budget error.
+/// F4 elimination keeps to its time budget on a case of minutes (a generic
+/// bicubic patch, `bench/bicubic.txt`, implicit degree 18: symbolic
+/// preprocessing of large matrices is checked too), and stops with the
+/// budget error.
 #[test]
 fn f4_elimination_keeps_its_time_budget() {
     let opts = GroebnerOptions {
@@ -111,17 +112,72 @@ fn f4_elimination_keeps_its_time_budget() {
         },
         ..Default::default()
     };
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../bench/bicubic.txt")).unwrap();
+    let coord = |c: &str| {
+        text.lines()
+            .find_map(|l| l.strip_prefix(c))
+            .unwrap_or_else(|| panic!("bench/bicubic.txt has no line {c}"))
+            .to_string()
+    };
+    let (x, y, z) = (coord("x="), coord("y="), coord("z="));
     let start = std::time::Instant::now();
-    let r = implicitize_groebner(
-        &[
-            "(-2*s^2*t-2)/(-1*s-3)",
-            "(-2*s^3-1*s^2*t)/(-2*s+1)",
-            "(-1*s^3+1*s*t^2)/(2*t+2)",
-        ],
-        &["s", "t"],
-        &opts,
-    );
+    let r = implicitize_groebner(&[&x, &y, &z], &["s", "t"], &opts);
     let took = start.elapsed();
     assert!(matches!(r, Err(ImplicitError::Groebner(_))), "{r:?}");
     assert!(took.as_secs_f64() < 2.0, "stopped after {took:?}");
+}
+
+/// `--method auto` measures the implicit degree, chooses by its cost
+/// estimate and gives elimination's answer: interpolation at low degree
+/// (random-9 of the implicitization bench: degree 8 although the Bézout
+/// bound is 25), resultants at high degree (the bicubic patch, degree 18),
+/// never the resultant with affine base points.
+#[test]
+fn auto_chooses_by_the_estimate_and_agrees_with_elimination() {
+    use isoray_algebra::auto::{implicitize_auto, AutoOptions, Method};
+    let cases: [([&str; 3], Method, u32); 3] = [
+        (
+            [
+                "(-2*s^2*t-2)/(-1*s-3)",
+                "(-2*s^3-1*s^2*t)/(-2*s+1)",
+                "(-1*s^3+1*s*t^2)/(2*t+2)",
+            ],
+            Method::Interpolation,
+            8,
+        ),
+        (
+            ["(s+t^2)/(t+1)", "(s^2-t)/(s+2)", "(s*t)/(s-t+1)"],
+            Method::Interpolation,
+            6,
+        ),
+        (
+            ["s/(s^2+t^2)", "t/(s^2+t^2)", "s*t/(s^2+t^2)"],
+            Method::Interpolation,
+            3,
+        ),
+    ];
+    for (coords, method, degree) in cases {
+        let a = implicitize_auto(&coords, &["s", "t"], &AutoOptions::default()).unwrap();
+        let g = implicitize_groebner(&coords, &["s", "t"], &GroebnerOptions::default()).unwrap();
+        assert_eq!(a.implicit.display(), g.display(), "{coords:?}");
+        assert_eq!(
+            (a.method, a.estimate.degree),
+            (method, Some(degree)),
+            "{coords:?}: {}",
+            a.estimate
+        );
+        assert_eq!(a.implicit.poly.degree(), i64::from(degree));
+    }
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../bench/bicubic.txt")).unwrap();
+    let coord = |c: &str| text.lines().find_map(|l| l.strip_prefix(c)).unwrap().to_string();
+    let (x, y, z) = (coord("x="), coord("y="), coord("z="));
+    let a = implicitize_auto(&[&x, &y, &z], &["s", "t"], &AutoOptions::default()).unwrap();
+    assert_eq!(
+        (a.method, a.estimate.degree),
+        (Method::Resultant, Some(18)),
+        "{}",
+        a.estimate
+    );
+    assert_eq!(a.implicit.poly.degree(), 18);
+    assert!(!a.estimate.base_points);
 }

@@ -11,10 +11,9 @@
 
 use std::time::{Duration, Instant};
 
-use isoray_algebra::implicit::ImplicitError;
-use isoray_algebra::interp::{implicitize_interpolation, InterpolationOptions};
+use isoray_algebra::auto::{implicitize_auto, AutoOptions};
 use isoray_algebra::parse::to_rational;
-use isoray_algebra::{implicitize_groebner, Budget, GroebnerOptions, MonomialOrder, Poly, Rat, RatFunc, Ring};
+use isoray_algebra::{MonomialOrder, Poly, Rat, RatFunc, Ring};
 use num_traits::One;
 
 use crate::algebraic::{dense_terms, eval_with_scale, squarefree_part, taylor_size, xyz_ring};
@@ -110,7 +109,8 @@ pub struct Equation {
 /// How a parametric surface was implicitized and checked.
 #[derive(Debug, Clone)]
 pub struct Implicitization {
-    /// "groebner" or "interpolation".
+    /// "groebner", "interpolation" or "resultant": the method that
+    /// `isoray_algebra::auto` chose by its cost estimate.
     pub method: &'static str,
     /// Points of the parametrization checked against the equation.
     pub checked_points: usize,
@@ -145,11 +145,9 @@ pub const MAX_TAYLOR_TERMS: usize = 20_000;
 /// Relative residual above which an implicit equation fails its check.
 pub const VERIFY_TOLERANCE: f64 = 1e-7;
 
-/// Time given to elimination before interpolation takes over.
-const GROEBNER_TIME: Duration = Duration::from_secs(5);
-
-/// Time given to interpolation.
-const INTERPOLATION_TIME: Duration = Duration::from_secs(120);
+/// Time given to the implicitization (`isoray_algebra::auto` chooses the
+/// method by its cost estimate).
+const IMPLICITIZATION_TIME: Duration = Duration::from_secs(125);
 
 /// Time given to the square-free part.
 const SQUAREFREE_TIME: Duration = Duration::from_secs(2);
@@ -301,34 +299,17 @@ fn analyze_parametric(lib: &Library, s: &Surface, params: &[Value]) -> Result<An
         });
         named
     });
-    let quick = GroebnerOptions {
-        budget: Budget {
-            time: Some(GROEBNER_TIME),
+    let result = implicitize_auto(
+        &texts,
+        &["s", "t"],
+        &AutoOptions {
+            time: Some(IMPLICITIZATION_TIME),
             interrupt: lib.cancel_token().cloned(),
-            ..Default::default()
+            progress,
         },
-        progress: progress.clone(),
-        ..Default::default()
-    };
-    let (result, method) = match implicitize_groebner(&texts, &["s", "t"], &quick) {
-        Err(ImplicitError::Groebner(isoray_algebra::GroebnerError::Interrupted { .. })) => {
-            (Err(ImplicitError::Cancelled), "groebner")
-        }
-        Err(ImplicitError::Groebner(_)) => (
-            implicitize_interpolation(
-                &texts,
-                &["s", "t"],
-                &InterpolationOptions {
-                    time: Some(INTERPOLATION_TIME),
-                    interrupt: lib.cancel_token().cloned(),
-                    progress,
-                    ..Default::default()
-                },
-            ),
-            "interpolation",
-        ),
-        other => (other, "groebner"),
-    };
+    );
+    let method = result.as_ref().map_or("auto", |a| a.method.as_str());
+    let result = result.map(|a| a.implicit);
     timings.push(("implicitization", t.elapsed()));
     let imp = result.map_err(|e| fail(format!("surface `{}` could not be implicitized: {e}", s.name)))?;
     let poly = to_rational(&imp.poly);

@@ -327,16 +327,34 @@ fn the_preview_shows_the_surface_alone() {
 
 #[test]
 fn a_slow_implicitization_can_be_cancelled() {
-    // Cubic numerators, a distinct denominator in each coordinate: minutes
-    // of elimination (random-9 of bench/algebra-implicit.sh).
-    let slow = r#"[surface.slow]
-parametric = { x = "(-2*s^2*t-2)/(-1*s-3)", y = "(-2*s^3-1*s^2*t)/(-2*s+1)", z = "(-1*s^3+1*s*t^2)/(2*t+2)" }
-domain = { s = [-0.5, 0.5], t = [-0.5, 0.5] }
+    // A generic polynomial patch of bidegree (4, 4): implicit degree 32,
+    // beyond interpolation's degrees; the resultant takes minutes.
+    let coord = |seed: u64| {
+        let mut r = seed;
+        let mut terms = Vec::new();
+        for i in 0..5 {
+            for j in 0..5 {
+                r ^= r << 13;
+                r ^= r >> 7;
+                r ^= r << 17;
+                terms.push(format!("{}*s^{i}*t^{j}", [-2, -1, 1, 2][(r % 4) as usize]));
+            }
+        }
+        terms.join(" + ")
+    };
+    let slow = format!(
+        r#"[surface.slow]
+parametric = {{ x = "{}", y = "{}", z = "{}" }}
+domain = {{ s = [-0.5, 0.5], t = [-0.5, 0.5] }}
 
 [[object]]
 shape = "slow(p)"
-"#;
-    let check = Check::start(slow.into(), "scene.toml".into(), "slow".into(), None, || {});
+"#,
+        coord(1),
+        coord(2),
+        coord(3)
+    );
+    let check = Check::start(slow, "scene.toml".into(), "slow".into(), None, || {});
     std::thread::sleep(std::time::Duration::from_millis(300));
     assert!(check.status().outcome.is_none(), "still running after 0.3 s");
     let asked = std::time::Instant::now();

@@ -297,6 +297,8 @@ pub fn cmd_implicitize(
             },
         )
     };
+    // The method auto chose and why, for --stats.
+    let mut chosen: Option<String> = None;
     let result = match method {
         "groebner" => implicitize_groebner(&coords, &params, &opts),
         "interpolation" => interp(opts.budget.time),
@@ -309,24 +311,19 @@ pub fn cmd_implicitize(
                 progress: reporter(&bar),
             },
         ),
-        _ => {
-            // Elimination first, with a few seconds; interpolation for what it cannot finish.
-            let quick = Duration::from_secs(5).min(opts.budget.time.unwrap_or(Duration::MAX));
-            let first = GroebnerOptions {
-                budget: Budget {
-                    time: Some(quick),
-                    interrupt: Some(crate::jobs::cancel_token()),
-                    ..Default::default()
-                },
+        _ => isoray_algebra::auto::implicitize_auto(
+            &coords,
+            &params,
+            &isoray_algebra::auto::AutoOptions {
+                time: opts.budget.time,
+                interrupt: Some(crate::jobs::cancel_token()),
                 progress: reporter(&bar),
-                ..Default::default()
-            };
-            match implicitize_groebner(&coords, &params, &first) {
-                Err(ImplicitError::Groebner(GroebnerError::Interrupted { .. })) => Err(ImplicitError::Cancelled),
-                Err(ImplicitError::Groebner(_)) => interp(opts.budget.time.map(|t| t.saturating_sub(quick))),
-                other => other,
-            }
-        }
+            },
+        )
+        .map(|a| {
+            chosen = Some(format!("method: {} ({})", a.method, a.estimate));
+            a.implicit
+        }),
     };
     if let Some(b) = &bar {
         b.finish();
@@ -335,6 +332,9 @@ pub fn cmd_implicitize(
         Ok(imp) => {
             println!("{}", imp.display());
             if stats {
+                if let Some(c) = &chosen {
+                    eprintln!("{c}");
+                }
                 eprintln!("{}", imp.stats);
             }
             Ok(())

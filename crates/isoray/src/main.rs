@@ -274,8 +274,10 @@ enum Command {
         /// Parameters (default s,t for surfaces, t for curves).
         #[arg(long, value_delimiter = ',')]
         params: Option<Vec<String>>,
-        /// auto (elimination, then interpolation if it takes too long), groebner,
-        /// interpolation or resultant (the Dixon resultant; stops at base points it cannot handle).
+        /// auto (measures the implicit degree modulo a prime and runs the method
+        /// with the cheapest cost estimate, the next one if it fails or overruns;
+        /// --stats says which and why), groebner, interpolation or resultant
+        /// (the Dixon resultant; stops at base points it cannot handle).
         #[arg(long, default_value = "auto")]
         method: String,
         /// Print statistics to stderr.
