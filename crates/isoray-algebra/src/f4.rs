@@ -2,13 +2,16 @@
 //! S-pairs of lowest degree are reduced together as the rows of one
 //! Macaulay matrix built by symbolic preprocessing, reduced by its known
 //! pivots with a dense accumulator, and echelonized; its rows with new
-//! leading monomials join the basis. Pairs are installed with Gebauer and
+//! leading monomials are reduced by each other (reduced row echelon form
+//! among them, as msolve does: sparser elements, smaller later matrices —
+//! eco-11 modulo 65521 went from 1.27 s to 0.80 s) and join the basis. Pairs are installed with Gebauer and
 //! Möller's criteria (the product criterion, the chain criterion in its
 //! M, F and B_k forms), as in [`crate::groebner`].
 //!
 //! Monomials live in a hash table and rows refer to them by index, so the
 //! matrix's columns are sorted once per round and a row is a list of column
-//! numbers and `u32` residues. The accumulator keeps residues below p² and
+//! numbers and `u32` residues. The table's hash is additive (a weighted sum
+//! of the exponents), so a product's hash is the sum of its factors'. The accumulator keeps residues below p² and
 //! reduces them modulo p only when it reaches their column (delayed
 //! reduction); a divisibility mask per monomial screens the search for
 //! reducers.
@@ -83,6 +86,10 @@ fn mask_of(m: &Monomial) -> u64 {
 /// table maps exponents to indices.
 struct Table {
     n: usize,
+    /// Σ weights[i]·e[i] is a monomial's hash: additive, so a product's
+    /// hash is the sum of its factors' (no rehashing in symbolic
+    /// preprocessing).
+    weights: Vec<u64>,
     exps: Vec<u16>,
     hashes: Vec<u64>,
     masks: Vec<u64>,
@@ -93,18 +100,24 @@ struct Table {
     scratch: Vec<u16>,
 }
 
-fn hash_exps(e: &[u16]) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for &x in e {
-        h = (h ^ x as u64).wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h ^ (h >> 29)
+/// The weight of variable `i` in the additive hash: odd, pseudo-random.
+fn hash_weight(i: usize) -> u64 {
+    let mut x = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    x ^= x >> 31;
+    x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    (x ^ (x >> 29)) | 1
+}
+
+/// The table slot of a hash (its high bits folded into the low ones).
+fn slot_of(h: u64, mask: usize) -> usize {
+    (h ^ (h >> 32) ^ (h >> 47)) as usize & mask
 }
 
 impl Table {
     fn new(n: usize) -> Table {
         Table {
             n,
+            weights: (0..n).map(hash_weight).collect(),
             exps: Vec::new(),
             hashes: Vec::new(),
             masks: Vec::new(),
@@ -118,23 +131,32 @@ impl Table {
         self.monos.len()
     }
 
-    fn exps_of(&self, k: u32) -> &[u16] {
-        &self.exps[k as usize * self.n..(k as usize + 1) * self.n]
+    /// The hash of exponents `e`.
+    fn hash(&self, e: &[u16]) -> u64 {
+        e.iter()
+            .zip(&self.weights)
+            .fold(0u64, |h, (&x, &w)| h.wrapping_add(w.wrapping_mul(x as u64)))
     }
 
-    /// The index of the exponents in `self.scratch`, added if new.
-    fn id_of_scratch(&mut self) -> u32 {
-        let h = hash_exps(&self.scratch);
+    /// The index of the exponents in `self.scratch` (whose hash is `h`),
+    /// added if new.
+    fn id_of_scratch(&mut self, h: u64) -> u32 {
         let mask = self.slots.len() - 1;
-        let mut i = h as usize & mask;
+        let mut i = slot_of(h, mask);
+        let n = self.n;
         loop {
             let s = self.slots[i];
             if s == 0 {
                 break;
             }
-            let k = s - 1;
-            if self.hashes[k as usize] == h && self.exps_of(k) == &self.scratch[..] {
-                return k;
+            let k = (s - 1) as usize;
+            if self.hashes[k] == h
+                && self.exps[k * n..(k + 1) * n]
+                    .iter()
+                    .zip(&self.scratch)
+                    .all(|(a, b)| a == b)
+            {
+                return k as u32;
             }
             i = (i + 1) & mask;
         }
@@ -155,7 +177,7 @@ impl Table {
         let size = self.slots.len() * 2;
         let mut slots = vec![0u32; size];
         for (k, &h) in self.hashes.iter().enumerate() {
-            let mut i = h as usize & (size - 1);
+            let mut i = slot_of(h, size - 1);
             while slots[i] != 0 {
                 i = (i + 1) & (size - 1);
             }
@@ -166,17 +188,26 @@ impl Table {
 
     fn id(&mut self, m: &Monomial) -> u32 {
         self.scratch.copy_from_slice(m.exps());
-        self.id_of_scratch()
+        let h = self.hash(m.exps());
+        self.id_of_scratch(h)
     }
 
-    /// The index of monomial k times `m`.
-    fn mul(&mut self, k: u32, m: &[u16]) -> u32 {
+    /// The index of monomial k times the monomial of exponents `m` and hash `hm`.
+    fn mul(&mut self, k: u32, m: &[u16], hm: u64) -> u32 {
         let base = k as usize * self.n;
         let src = &self.exps[base..base + self.n];
+        let mut saturated = false;
         for ((d, &a), &b) in self.scratch.iter_mut().zip(src).zip(m) {
-            *d = a.saturating_add(b);
+            let (v, o) = a.overflowing_add(b);
+            *d = if o { u16::MAX } else { v };
+            saturated |= o;
         }
-        self.id_of_scratch()
+        let h = if saturated {
+            self.hash(&self.scratch.clone())
+        } else {
+            self.hashes[k as usize].wrapping_add(hm)
+        };
+        self.id_of_scratch(h)
     }
 }
 
@@ -351,9 +382,10 @@ impl<'r> F4<'r> {
         if m.is_one() {
             return self.basis[g].clone();
         }
+        let hm = self.table.hash(m.exps());
         let mut mons = Vec::with_capacity(self.basis[g].mons.len());
         for k in 0..self.basis[g].mons.len() {
-            mons.push(self.table.mul(self.basis[g].mons[k], m.exps()));
+            mons.push(self.table.mul(self.basis[g].mons[k], m.exps(), hm));
         }
         Row {
             mons,
@@ -367,25 +399,36 @@ impl<'r> F4<'r> {
     /// one's; F: one pair per lcm) and the product criterion; the old pairs
     /// that lm(h) makes redundant (B_k) are dropped.
     fn update_pairs(&mut self, h: usize, lh: &Monomial, sugar: u32) {
-        let cand: Vec<(usize, Monomial)> = (0..h)
+        // (element, lcm, the lcm's divisibility mask, its degree).
+        let cand: Vec<(usize, Monomial, u64)> = (0..h)
             .filter(|&g| self.alive[g])
-            .map(|g| (g, self.lead[g].lcm(lh)))
+            .map(|g| {
+                let l = self.lead[g].lcm(lh);
+                let m = mask_of(&l);
+                (g, l, m)
+            })
             .collect();
         self.stats.pairs_created += cand.len() as u64;
         let criteria = self.opts.criteria;
+        // The lcms of the coprime pairs (criterion F below).
+        let coprime_lcms: FxHashSet<&Monomial> = if criteria.chain && criteria.product {
+            cand.iter()
+                .filter(|(g, _, _)| self.lead[*g].coprime(lh))
+                .map(|(_, l, _)| l)
+                .collect()
+        } else {
+            FxHashSet::default()
+        };
         let mut kept = 0;
-        for (k, (g, l)) in cand.iter().enumerate() {
+        for (k, (g, l, m)) in cand.iter().enumerate() {
+            // The masks reject most candidates before the exponents are compared.
             let dominated = criteria.chain
-                && cand
-                    .iter()
-                    .enumerate()
-                    .any(|(k2, (_, l2))| k2 != k && l2.divides(l) && (l2 != l || k2 < k));
+                && cand.iter().enumerate().any(|(k2, (_, l2, m2))| {
+                    k2 != k && m2 & !m == 0 && l2.degree() <= l.degree() && l2.divides(l) && (k2 < k || l2 != l)
+                });
             let coprime = criteria.product && self.lead[*g].coprime(lh);
             // A pair whose lcm equals a coprime pair's lcm goes with it (F).
-            let same_as_coprime = criteria.chain
-                && criteria.product
-                && !coprime
-                && cand.iter().any(|(g2, l2)| l2 == l && self.lead[*g2].coprime(lh));
+            let same_as_coprime = !coprime && coprime_lcms.contains(l);
             if coprime {
                 self.stats.removed_product += 1;
             } else if dominated || same_as_coprime {
@@ -721,6 +764,27 @@ impl<'r> F4<'r> {
         let t0 = Instant::now();
         let (nred, ntodo, steps0) = (store.len(), todo.len(), self.stats.reduction_steps);
         let results = self.echelon(order.len(), &mut piv, &mut store, todo, false)?;
+        // Back-substitution, as msolve does: each new row's tail reduced by
+        // the other new rows (a left-to-right pass meets every new leading
+        // column, so the order does not matter), for sparser new elements
+        // and smaller matrices later. Recorded as a step keeping the leads.
+        let fresh: Vec<u32> = results.into_iter().flatten().collect();
+        let results: Vec<Option<u32>> = if fresh.len() > 1 {
+            let rows = fresh
+                .iter()
+                .map(|&k| {
+                    let m = &store[k as usize];
+                    MatRow {
+                        cols: m.cols.clone(),
+                        coefs: m.coefs.clone(),
+                        src: m.src,
+                    }
+                })
+                .collect();
+            self.echelon(order.len(), &mut piv, &mut store, rows, true)?
+        } else {
+            fresh.into_iter().map(Some).collect()
+        };
         if self.debug {
             let nnz: usize = store[..nred].iter().map(|r| r.cols.len()).sum();
             eprintln!(
@@ -730,7 +794,7 @@ impl<'r> F4<'r> {
                 ntodo,
                 order.len(),
                 self.stats.reduction_steps - steps0,
-                store.len() - nred,
+                results.iter().flatten().count(),
                 t0.elapsed().as_secs_f64() * 1e3
             );
         }
@@ -1089,6 +1153,8 @@ pub(crate) fn f4_replay_coefs(
                 .map(|&c| (std::mem::take(&mut acc[c as usize]) * inv % p) as u32)
                 .collect();
             if step.keep_lead {
+                // The polynomial's new version (later steps refer to it).
+                vals[r.src as usize] = coefs.clone();
                 last.push(coefs);
             } else {
                 piv[support[0] as usize] = store.len() as u32;
