@@ -45,6 +45,8 @@ pub fn rational_reconstruction(a: &Int, m: &Int) -> Option<Rat> {
 /// is dashu's (Lehmer's gcd, fast division).
 pub struct Reconstructor {
     m: UBig,
+    /// `m` as an [`Int`], for [`Reconstructor::reconstruct`]'s residues.
+    m_int: Int,
     half: UBig,
     bound: UBig,
 }
@@ -62,6 +64,7 @@ impl Reconstructor {
         Reconstructor {
             bound: half.sqrt(),
             half,
+            m_int: from_zint(&ZInt::from(m.clone())),
             m,
         }
     }
@@ -69,13 +72,13 @@ impl Reconstructor {
     /// r/s ≡ a (mod m) with |r|, s ≤ √(m/2), if it exists: Wang's
     /// algorithm, the half-extended Euclidean algorithm stopped at the bound.
     pub fn reconstruct(&self, a: &Int) -> Option<Rat> {
-        let a = to_zint(&a.mod_floor(&from_zint(&ZInt::from(self.m.clone()))));
+        let a = to_zint(&a.mod_floor(&self.m_int));
         let a = UBig::try_from(a).unwrap_or(UBig::ZERO);
         self.reconstruct_u(&a).map(|(n, d)| to_rat(&n, &d))
     }
 
     /// Wang's algorithm for a in 0..m: (numerator, positive denominator).
-    pub(crate) fn reconstruct_u(&self, a: &UBig) -> Option<(ZInt, ZInt)> {
+    pub(crate) fn reconstruct_u(&self, a: &UBig) -> Option<(ZInt, UBig)> {
         let (mut r0, mut r1) = (self.m.clone(), a.clone());
         let (mut s0, mut s1) = (ZInt::ZERO, ZInt::ONE);
         while r1 > self.bound {
@@ -90,14 +93,14 @@ impl Reconstructor {
             return None;
         }
         let r = ZInt::from(r1);
-        Some((if neg { -r } else { r }, ZInt::from(s)))
+        Some((if neg { -r } else { r }, s))
     }
 
     /// As [`Reconstructor::reconstruct_u`], trying the denominator `den`
     /// first: if a·den mod m (symmetric) is within the bound, the fraction
     /// is it over den (the reconstruction within the bounds is unique), at
     /// the cost of one product, one division and one gcd.
-    pub(crate) fn reconstruct_with(&self, a: &UBig, den: &UBig) -> Option<(ZInt, ZInt)> {
+    pub(crate) fn reconstruct_with(&self, a: &UBig, den: &UBig) -> Option<(ZInt, UBig)> {
         if !den.is_zero() && *den <= self.bound {
             let c = (a * den) % &self.m;
             let (neg, mag) = if c > self.half { (true, &self.m - c) } else { (false, c) };
@@ -109,7 +112,7 @@ impl Reconstructor {
                     (mag / &g, den / &g)
                 };
                 let n = ZInt::from(n);
-                return Some((if neg { -n } else { n }, ZInt::from(d)));
+                return Some((if neg { -n } else { n }, d));
             }
         }
         self.reconstruct_u(a)
@@ -117,8 +120,8 @@ impl Reconstructor {
 }
 
 /// n/d as a [`Rat`] (already in lowest terms, d > 0).
-pub(crate) fn to_rat(n: &ZInt, d: &ZInt) -> Rat {
-    Rat::new_raw(from_zint(n), from_zint(d))
+pub(crate) fn to_rat(n: &ZInt, d: &UBig) -> Rat {
+    Rat::new_raw(from_zint(n), from_zint(&ZInt::from(d.clone())))
 }
 
 /// A basis lifted so far: for each element, monomial → residue modulo `modulus`.

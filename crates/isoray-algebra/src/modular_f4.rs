@@ -225,12 +225,11 @@ impl Lift {
                     continue;
                 }
                 let (n, d) = rec.reconstruct_with(&a, &den)?;
-                let d = UBig::try_from(d).expect("positive");
                 if !(&den % &d).is_zero() {
                     let g = (&den).gcd(&d);
                     den = &den / g * &d;
                 }
-                terms.push((m.clone(), to_rat(&ZInt::from(n), &ZInt::from(d))));
+                terms.push((m.clone(), to_rat(&n, &d)));
             }
             out.push(Poly::from_terms(ring, terms));
         }
