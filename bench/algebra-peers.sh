@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Whole-process Gröbner bases beside msolve, Singular and giac (issue 18):
 # reduced bases in grevlex of katsura-N and cyclic-N over Q and over
-# GF(65521), each program run once per case in its own process, wall
-# seconds and peak RSS from /usr/bin/time, a timeout per run (TIMEOUT,
+# GF(65521) (and four systems from the literature: eco-10, eco-11, noon-7,
+# reimer-6), each program run once per case in its own process, wall
+# seconds and peak RSS (bench/algebra/timed.sh), a timeout per run (TIMEOUT,
 # default 120 s). The basis length each prints is compared (all must agree).
 #
 #   bench/algebra-peers.sh                        # the default cases

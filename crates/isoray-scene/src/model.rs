@@ -741,20 +741,26 @@ pub fn surface_keys() -> &'static [KeySpec] {
             key_without_default(
                 "sdf",
                 Kind::Str,
-                "one of `sdf`, `implicit`, `parametric`",
+                "one of `sdf`, `implicit`, `parametric`, `vm`",
                 "the body: shape text whose `p` is the point argument",
             ),
             key_without_default(
                 "implicit",
                 Kind::Str,
-                "one of the three",
+                "one of the four",
                 "an equation f = 0 in `x`, `y`, `z` (also `p`), the parameters and the built-ins",
             ),
             key_without_default(
                 "parametric",
                 Kind::Text("inline table `{ x, y, z }`"),
-                "one of the three",
+                "one of the four",
                 "the coordinates as expressions in `s`, `t`, the parameters and the built-ins; rational ones are implicitized",
+            ),
+            key_without_default(
+                "vm",
+                Kind::Str,
+                "one of the four",
+                "a model in fidget's `.vm` tape format (path relative to the scene file), its `var-x`, `var-y`, `var-z` the point `p`",
             ),
             key_without_default(
                 "domain",

@@ -358,14 +358,15 @@ impl<'a> Build<'a> {
                 let sdf = r.string("sdf")?;
                 let implicit = r.string("implicit")?;
                 let parametric = r.get("parametric");
-                let given: Vec<&Located> = [sdf.map(|x| x.1), implicit.map(|x| x.1), parametric]
+                let vm = r.string("vm")?;
+                let given: Vec<&Located> = [sdf.map(|x| x.1), implicit.map(|x| x.1), parametric, vm.map(|x| x.1)]
                     .into_iter()
                     .flatten()
                     .collect();
                 if given.len() > 1 {
                     return Err(src.error(
                         given[1].origin,
-                        format!("`{ctx}` has more than one of `sdf`, `implicit` and `parametric`: a surface has exactly one mode"),
+                        format!("`{ctx}` has more than one of `sdf`, `implicit`, `parametric` and `vm`: a surface has exactly one mode"),
                         Some("remove all but one"),
                         &[],
                     ));
@@ -395,13 +396,25 @@ impl<'a> Build<'a> {
                         ));
                     }
                 }
+                if let Some((file, loc)) = vm {
+                    r.finish_keys(surface_keys())?;
+                    let text = vm_surface_text(src, loc, file, &ctx)?;
+                    let Item::Str(_, map) = &loc.item else { unreachable!() };
+                    // Shape-level errors point at the path (the text is generated).
+                    let id = snippets.len();
+                    snippets.push((loc, &map[..map.len().min(1)]));
+                    lib.add_surface_with_mode(&e.key, sparams, &text, id, SurfaceMode::Sdf)
+                        .map_err(|d| shape_error(snippets, d))?;
+                    lib.set_surface_options(&e.key, options);
+                    continue;
+                }
                 let (text, loc, mode) = match (sdf, implicit) {
                     (Some((t, l)), None) => (t, l, SurfaceMode::Sdf),
                     (None, Some((t, l))) => (t, l, SurfaceMode::Implicit),
                     _ => {
                         return Err(src.error(
                             e.value.origin,
-                            format!("`{ctx}` needs an `sdf` expression, an `implicit` equation or a `parametric` x, y, z"),
+                            format!("`{ctx}` needs an `sdf` expression, an `implicit` equation, a `parametric` x, y, z or a `vm` file"),
                             Some("add sdf = \"...\", implicit = \"...\" or parametric = { x = \"...\", y = \"...\", z = \"...\" }"),
                             &[],
                         ))
@@ -915,6 +928,35 @@ fn uniform_values<'a>(
         }
         _ => Err(bad(v)),
     }
+}
+
+/// The shape text of `[surface.NAME] vm = "FILE"`: fidget's `.vm` tape
+/// format read from FILE (relative to the scene file's directory) and
+/// translated by [`isoray_shape::vm::vm_to_shape_text`]; errors name the
+/// file, line and column.
+fn vm_surface_text(src: &Sources, loc: &Located, file: &str, ctx: &str) -> Result<String> {
+    let path = Path::new(&src.path)
+        .parent()
+        .filter(|p| p.is_dir())
+        .map(Path::to_path_buf)
+        .unwrap_or_default()
+        .join(file);
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        src.error(
+            loc.origin,
+            format!("`{ctx}.vm`: cannot read `{}`: {e}", path.display()),
+            Some("cannot read this file"),
+            &["a `.vm` file is fidget's tape format, relative to the scene file".into()],
+        )
+    })?;
+    isoray_shape::vm::vm_to_shape_text(&text).map_err(|e| {
+        src.error(
+            loc.origin,
+            format!("`{ctx}.vm`: {}:{}:{}: {}", path.display(), e.line, e.column, e.message),
+            Some("in this model"),
+            &[],
+        )
+    })
 }
 
 /// `[environment]`: an equirectangular `image` or a `cube` of six faces,

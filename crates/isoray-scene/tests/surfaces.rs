@@ -273,7 +273,8 @@ fn each_surface_is_implicitized_once() {
     let first = analysis(&s, "b");
     let again = analysis(&s, "b");
     assert!(std::sync::Arc::ptr_eq(&first, &again));
-    assert_eq!(first.implicitization.as_ref().unwrap().method, "groebner");
+    // The cost estimate picks interpolation for this degree-2 surface.
+    assert_eq!(first.implicitization.as_ref().unwrap().method, "interpolation");
 }
 
 #[test]

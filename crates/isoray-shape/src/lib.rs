@@ -28,6 +28,7 @@ mod lower;
 pub mod surface;
 pub mod syntax;
 pub mod types;
+pub mod vm;
 pub mod wgsl;
 
 pub use diag::{Diagnostic, SourceId, Span};

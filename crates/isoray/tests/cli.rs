@@ -341,6 +341,27 @@ fn implicitize_by_interpolation_agrees_with_elimination() {
 }
 
 #[test]
+fn implicitize_auto_reports_its_choice() {
+    // The issue-18 surface: degree 6 measured, the cheapest estimate wins.
+    let args = ["--x", "(s+t^2)/(t+1)", "--y", "(s^2-t)/(s+2)", "--z", "(s*t)/(s-t+1)"];
+    same_as_groebner(&args, "auto");
+    let o = run(isoray().arg("implicitize").args(args).arg("--stats"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    let line = e
+        .lines()
+        .find(|l| l.starts_with("method: "))
+        .unwrap_or_else(|| panic!("{e}"));
+    assert!(line.contains("implicit degree 6"), "{line}");
+    assert!(
+        ["groebner", "interpolation", "resultant"]
+            .iter()
+            .all(|m| line.contains(&format!("{m} "))),
+        "{line}"
+    );
+}
+
+#[test]
 fn surface_command_prints_the_derived_equation() {
     let scene = examples().join("surfaces.toml");
     let o = run(isoray().arg("surface").arg(&scene).arg("sphere_rational"));
