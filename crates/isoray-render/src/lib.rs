@@ -35,6 +35,7 @@ pub mod output;
 pub mod sequence;
 pub mod tiles;
 pub mod trace;
+pub mod voxels;
 mod whitted;
 
 use std::sync::atomic::{AtomicU64, Ordering};

@@ -3,6 +3,7 @@
 mod algebra_cmd;
 mod compare;
 mod dent_cmd;
+mod depth_cmd;
 mod frames_cmd;
 #[cfg(feature = "gpu")]
 mod gpu_cmd;
@@ -345,6 +346,45 @@ enum Command {
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
         /// No summary.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// Depth and normal images by voxel rasterization with interval pruning,
+    /// as fidget's render3d makes them: an orthographic view whose image spans
+    /// [-1, 1] world units, each pixel a column of --depth voxels; the depth is
+    /// that of the nearest voxel whose center is inside the scene's shape.
+    Depth {
+        #[command(flatten)]
+        input: SceneArgs,
+        /// Output depth image (PNG, gray: nearer is brighter, empty is black).
+        #[arg(short, long, value_name = "OUT.png")]
+        output: PathBuf,
+        /// Also write the normals (PNG, RGB from the unit normal's x, y, z in [-1, 1]).
+        #[arg(long, value_name = "NORMALS.png")]
+        normals: Option<PathBuf>,
+        /// Image width and height in pixels.
+        #[arg(long, default_value_t = 512, value_name = "N")]
+        size: u32,
+        /// Voxels per pixel column (default: --size).
+        #[arg(long, value_name = "D")]
+        depth: Option<u32>,
+        /// The view as fidget's render3d --isometric takes it: model =
+        /// Ry(yaw)·Rz(roll)·Rx(pitch)·world/scale.
+        #[arg(long, default_value_t = 1.0, value_name = "S")]
+        scale: f64,
+        /// Turn about x, degrees.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_name = "DEG")]
+        pitch: f64,
+        /// Turn about y, degrees.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_name = "DEG")]
+        yaw: f64,
+        /// Turn about z, degrees.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true, value_name = "DEG")]
+        roll: f64,
+        /// Worker threads (default: one per core).
+        #[arg(long, value_name = "N")]
+        threads: Option<usize>,
+        /// No summary line.
         #[arg(short, long)]
         quiet: bool,
     },
@@ -717,6 +757,28 @@ fn main() -> ExitCode {
             tolerance,
             threads,
             check_intersections,
+            quiet,
+        }),
+        Command::Depth {
+            input,
+            output,
+            normals,
+            size,
+            depth,
+            scale,
+            pitch,
+            yaw,
+            roll,
+            threads,
+            quiet,
+        } => depth_cmd::cmd_depth(&depth_cmd::DepthArgs {
+            input: &input,
+            output: &output,
+            normals: normals.as_deref(),
+            size,
+            depth,
+            view: [scale, pitch, yaw, roll],
+            threads,
             quiet,
         }),
         Command::Surface { input, name } => cmd_surface(&input, &name),

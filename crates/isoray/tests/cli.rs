@@ -723,3 +723,48 @@ fn the_backend_flag() {
         assert!(stderr(&o).contains("--features gpu"), "{}", stderr(&o));
     }
 }
+
+#[test]
+fn depth_command_rasterizes_a_vm_model() {
+    // fidget's tangle cube x⁴ − 5x² + y⁴ − 5y² + z⁴ − 5z² + 10 seen along −z
+    // at scale 0.25 (model = 4 · world): the pixel column at model
+    // (x, y) = (0, 0) first enters the solid where z⁴ − 5z² + 10 < 0 …
+    // never (its minimum is 3.75), so the center is empty, while the column
+    // at (1.5, 1.5) meets it.
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../bench/models/tanglecube.vm");
+    let scene = write_scene(
+        "tangle.toml",
+        &format!(
+            "[surface.tangle]\nvm = \"{}\"\n\n[[object]]\nshape = \"tangle(p)\"\n",
+            model.display()
+        ),
+    );
+    let (depth, normals) = (tmp("tangle-depth.png"), tmp("tangle-normals.png"));
+    let o = run(isoray()
+        .arg("depth")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&depth)
+        .arg("--normals")
+        .arg(&normals)
+        .args(["--size", "64", "--scale", "0.25"]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let d = image::open(&depth).unwrap().to_luma8();
+    assert_eq!(d.dimensions(), (64, 64));
+    // Pixel (x, y) has world ((x + 0.5 − 32)/32, −(y + 0.5 − 31)/32), model 4× that.
+    assert_eq!(d.get_pixel(31, 30)[0], 0, "the center column is empty");
+    assert!(d.get_pixel(44, 18)[0] > 0, "the column at model (1.5, 1.5) is filled");
+    assert!(image::open(&normals).is_ok());
+    let o = run(isoray()
+        .arg("depth")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&depth)
+        .args(["--scale", "0"]));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--scale must be a positive number"),
+        "{}",
+        stderr(&o)
+    );
+}
