@@ -42,8 +42,9 @@
 //! ```
 
 use isoray_shape::eval::{BatchEvaluator, GradientMode, LANES};
-use isoray_shape::interval::{eval_interval, Interval};
+use isoray_shape::interval::{eval_interval_choices, Choice, Interval};
 use isoray_shape::ir::Tape;
+use isoray_shape::simplify::simplify;
 use rayon::prelude::*;
 
 /// The image side of a tile rendered by one task.
@@ -235,7 +236,14 @@ struct TileRender<'a> {
     h: u32,
     /// TILE × TILE depths.
     depths: Vec<u32>,
+    /// For the normals of pixels filled by a solid cube (the full tape).
     eval: BatchEvaluator<'a, f64>,
+    /// TILE × TILE normals, and whether each was computed (in a leaf, with
+    /// its short tape).
+    normals: Vec<[f32; 3]>,
+    has_normal: Vec<bool>,
+    /// Scratch: the min/max choices of the last interval evaluation.
+    choices: Vec<Choice>,
     xs: Vec<f64>,
     ys: Vec<f64>,
     zs: Vec<f64>,
@@ -254,6 +262,9 @@ impl<'a> TileRender<'a> {
             h: TILE.min(view.height - y0),
             depths: vec![0; (TILE * TILE) as usize],
             eval: BatchEvaluator::new(tape),
+            normals: vec![[0.0; 3]; (TILE * TILE) as usize],
+            has_normal: vec![false; (TILE * TILE) as usize],
+            choices: Vec::new(),
             xs: vec![0.0; LANES],
             ys: vec![0.0; LANES],
             zs: vec![0.0; LANES],
@@ -268,13 +279,15 @@ impl<'a> TileRender<'a> {
             let size = TILE.min(z);
             // A partial cube at the bottom is bounded as a whole cube; the
             // voxels below 0 are never filled (see `leaf`).
-            self.cube(0, 0, z - size, TILE);
+            let tape = self.tape;
+            self.cube(tape, 0, 0, z - size, TILE);
             z -= size;
         }
     }
 
-    /// Cube of side `size` at tile-relative pixel (i, j) and voxel layer z.
-    fn cube(&mut self, i: u32, j: u32, z: u32, size: u32) {
+    /// Cube of side `size` at tile-relative pixel (i, j) and voxel layer z,
+    /// `tape` the shape's tape simplified for a box around it.
+    fn cube(&mut self, tape: &Tape, i: u32, j: u32, z: u32, size: u32) {
         if i >= self.w || j >= self.h {
             return;
         }
@@ -290,7 +303,7 @@ impl<'a> TileRender<'a> {
             [sx + 0.5, sy + 0.5, z as f64 + 0.5],
             [sx + size as f64 - 0.5, sy + size as f64 - 0.5, (top - 1) as f64 + 0.5],
         );
-        let v = eval_interval(self.tape, self.vars, b[0], b[1], b[2]);
+        let v = eval_interval_choices(tape, self.vars, b, Some(&mut self.choices));
         if v.lo > 0.0 {
             return;
         }
@@ -303,15 +316,20 @@ impl<'a> TileRender<'a> {
             }
             return;
         }
+        // The branches that cannot win in this cube are dropped for all
+        // that is evaluated inside it.
+        let simplified = simplify(tape, &self.choices);
+        let tape = simplified.as_ref().unwrap_or(tape);
         if size <= LEAF {
-            self.leaf(i, j, z, size);
+            let mut eval = BatchEvaluator::new(tape);
+            self.leaf(&mut eval, i, j, z, size);
             return;
         }
         let s = size / 2;
         for dz in [s, 0] {
             for dj in [0, s] {
                 for di in [0, s] {
-                    self.cube(i + di, j + dj, z + dz, s);
+                    self.cube(tape, i + di, j + dj, z + dz, s);
                 }
             }
         }
@@ -319,7 +337,7 @@ impl<'a> TileRender<'a> {
 
     /// Evaluates the voxel centers of a leaf cube in one batch and sets the
     /// depth of each column from its nearest filled voxel.
-    fn leaf(&mut self, i: u32, j: u32, z: u32, size: u32) {
+    fn leaf(&mut self, eval: &mut BatchEvaluator<f64>, i: u32, j: u32, z: u32, size: u32) {
         let n = (size * size * size) as usize;
         debug_assert!(n <= LANES);
         let mut k = 0;
@@ -338,37 +356,60 @@ impl<'a> TileRender<'a> {
                 }
             }
         }
-        self.eval.eval(
+        eval.eval(
             self.vars,
             &self.xs[..n],
             &self.ys[..n],
             &self.zs[..n],
             &mut self.out[..n],
         );
+        // Columns whose depth this leaf sets, and their voxels (the batch index).
+        let mut set: Vec<(usize, usize)> = Vec::new();
         for dj in 0..size {
             for di in 0..size {
                 if i + di >= self.w || j + dj >= self.h {
                     continue;
                 }
-                let d = &mut self.depths[((j + dj) * TILE + i + di) as usize];
+                let k = ((j + dj) * TILE + i + di) as usize;
                 for dz in (0..size).rev() {
-                    if z + dz < *d {
+                    if z + dz < self.depths[k] {
                         break;
                     }
-                    if self.out[((dz * size + dj) * size + di) as usize] < 0.0 {
-                        *d = z + dz + 1;
+                    let b = ((dz * size + dj) * size + di) as usize;
+                    if self.out[b] < 0.0 {
+                        self.depths[k] = z + dz + 1;
+                        set.push((k, b));
                         break;
                     }
                 }
             }
         }
+        // Their normals, with this leaf's short tape (a depth found
+        // front to back is final).
+        if set.is_empty() {
+            return;
+        }
+        let n = set.len();
+        let (mut px, mut py, mut pz) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for (c, &(_, b)) in set.iter().enumerate() {
+            (px[c], py[c], pz[c]) = (self.xs[b], self.ys[b], self.zs[b]);
+        }
+        let (mut gx, mut gy, mut gz) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        eval.gradients(self.vars, &px, &py, &pz, GradientMode::Dual, &mut gx, &mut gy, &mut gz);
+        for (c, &(k, _)) in set.iter().enumerate() {
+            self.normals[k] = world_normal(&self.view.world_to_model, [gx[c], gy[c], gz[c]]);
+            self.has_normal[k] = true;
+        }
     }
 
-    /// The unit gradients in world axes at the filled voxels.
+    /// The unit gradients in world axes at the filled voxels: those the
+    /// leaves did not compute (pixels filled by a solid cube) with the full
+    /// tape.
     fn normals(&mut self) -> Vec<[f32; 3]> {
-        let mut out = vec![[0.0f32; 3]; (TILE * TILE) as usize];
-        let m = self.view.world_to_model;
-        let filled: Vec<usize> = (0..out.len()).filter(|&k| self.depths[k] > 0).collect();
+        let mut out = std::mem::take(&mut self.normals);
+        let filled: Vec<usize> = (0..out.len())
+            .filter(|&k| self.depths[k] > 0 && !self.has_normal[k])
+            .collect();
         for chunk in filled.chunks(LANES) {
             for (c, &k) in chunk.iter().enumerate() {
                 let (i, j) = (k as u32 % TILE, k as u32 / TILE);
@@ -394,16 +435,22 @@ impl<'a> TileRender<'a> {
                 &mut gz,
             );
             for (c, &k) in chunk.iter().enumerate() {
-                // ∇_world f = Mᵀ ∇_model f (M the linear part of world → model).
-                let g = [gx[c], gy[c], gz[c]];
-                let wv: [f64; 3] = std::array::from_fn(|a| (0..3).map(|r| m[r][a] * g[r]).sum());
-                let len = (wv[0] * wv[0] + wv[1] * wv[1] + wv[2] * wv[2]).sqrt();
-                if len > 0.0 && len.is_finite() {
-                    out[k] = [(wv[0] / len) as f32, (wv[1] / len) as f32, (wv[2] / len) as f32];
-                }
+                out[k] = world_normal(&self.view.world_to_model, [gx[c], gy[c], gz[c]]);
             }
         }
         out
+    }
+}
+
+/// The unit normal in world axes of model gradient g: ∇_world f = Mᵀ ∇_model f
+/// (M the linear part of world → model); zero where it vanishes.
+fn world_normal(m: &[[f64; 4]; 3], g: [f64; 3]) -> [f32; 3] {
+    let wv: [f64; 3] = std::array::from_fn(|a| (0..3).map(|r| m[r][a] * g[r]).sum());
+    let len = (wv[0] * wv[0] + wv[1] * wv[1] + wv[2] * wv[2]).sqrt();
+    if len > 0.0 && len.is_finite() {
+        [(wv[0] / len) as f32, (wv[1] / len) as f32, (wv[2] / len) as f32]
+    } else {
+        [0.0; 3]
     }
 }
 

@@ -243,10 +243,32 @@ fn trig(a: Interval, f: fn(f64) -> f64, first: f64) -> Interval {
 
 /// Bounds of a tape over the box x × y × z, with the inputs `vars`.
 pub fn eval_interval(tape: &Tape, vars: &[f64], x: Interval, y: Interval, z: Interval) -> Interval {
+    eval_interval_choices(tape, vars, [x, y, z], None)
+}
+
+/// Which operands of a `min` or `max` can give its value over a box.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Choice {
+    /// Either (or another instruction than min and max).
+    Both,
+    /// Only the left operand: its interval lies strictly on the winning side.
+    Left,
+    /// Only the right operand.
+    Right,
+}
+
+/// [`eval_interval`] over the box `xyz`, also recording in `choices` (one
+/// entry per instruction, when given) which operands of each `min` and
+/// `max` can win anywhere in the box: [`crate::simplify::simplify`] drops
+/// the others.
+pub fn eval_interval_choices(
+    tape: &Tape,
+    vars: &[f64],
+    xyz: [Interval; 3],
+    mut choices: Option<&mut Vec<Choice>>,
+) -> Interval {
     let mut s = vec![WHOLE; tape.slots()];
-    s[0] = x;
-    s[1] = y;
-    s[2] = z;
+    s[..3].copy_from_slice(&xyz);
     for &(k, v) in tape.constants() {
         s[k as usize] = Interval::point(v);
     }
@@ -254,12 +276,26 @@ pub fn eval_interval(tape: &Tape, vars: &[f64], x: Interval, y: Interval, z: Int
     for (k, v) in tape.prologue().run(vars, &mut scratch) {
         s[k] = Interval::point(v);
     }
+    if let Some(c) = choices.as_deref_mut() {
+        c.clear();
+    }
     for ins in tape.instrs() {
+        let mut choice = Choice::Both;
         match *ins {
             // Lazy regions are evaluated: their select takes the hull where c may be ≤ 0.
             Instr::Skip { .. } => {}
             Instr::Unary { op, out, a } => s[out as usize] = Interval::unary(op, s[a as usize]),
-            Instr::Binary { op, out, a, b } => s[out as usize] = Interval::binary(op, s[a as usize], s[b as usize]),
+            Instr::Binary { op, out, a, b } => {
+                let (ia, ib) = (s[a as usize], s[b as usize]);
+                choice = match op {
+                    BinOp::Min if ia.hi < ib.lo => Choice::Left,
+                    BinOp::Min if ib.hi < ia.lo => Choice::Right,
+                    BinOp::Max if ia.lo > ib.hi => Choice::Left,
+                    BinOp::Max if ib.lo > ia.hi => Choice::Right,
+                    _ => Choice::Both,
+                };
+                s[out as usize] = Interval::binary(op, ia, ib);
+            }
             Instr::Select { out, c, a, b } => {
                 let ci = s[c as usize];
                 s[out as usize] = if ci.lo > 0.0 {
@@ -270,6 +306,9 @@ pub fn eval_interval(tape: &Tape, vars: &[f64], x: Interval, y: Interval, z: Int
                     Interval::hull(s[a as usize], s[b as usize])
                 };
             }
+        }
+        if let Some(c) = choices.as_deref_mut() {
+            c.push(choice);
         }
     }
     s[tape.output()]

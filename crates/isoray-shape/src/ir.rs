@@ -1230,6 +1230,20 @@ impl Tape {
         t
     }
 
+    /// This tape with other instructions (the same constants, prologue,
+    /// inputs, slots and output slot): for rewrites such as
+    /// [`crate::simplify::simplify`], which must keep the tape's invariants.
+    pub fn with_instrs(&self, instrs: Vec<Instr>) -> Tape {
+        Tape {
+            constants: self.constants.clone(),
+            prologue: self.prologue.clone(),
+            vars: self.vars.clone(),
+            instrs,
+            slots: self.slots,
+            output: self.output,
+        }
+    }
+
     /// True when the tape reads input `var`.
     pub fn reads(&self, var: u32) -> bool {
         self.vars.binary_search(&var).is_ok()
