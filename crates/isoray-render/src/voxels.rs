@@ -288,14 +288,45 @@ impl<'a> TileRender<'a> {
     /// Cube of side `size` at tile-relative pixel (i, j) and voxel layer z,
     /// `tape` the shape's tape simplified for a box around it.
     fn cube(&mut self, tape: &Tape, i: u32, j: u32, z: u32, size: u32) {
-        if i >= self.w || j >= self.h {
+        if !self.ambiguous(tape, i, j, z, size) {
             return;
+        }
+        // The branches that cannot win in this cube are dropped for all
+        // that is evaluated inside it.
+        let simplified = simplify(tape, &self.choices);
+        let tape = simplified.as_ref().unwrap_or(tape);
+        let s = size / 2;
+        let children = [s, 0].into_iter().flat_map(|dz| {
+            [0, s]
+                .into_iter()
+                .flat_map(move |dj| [0, s].into_iter().map(move |di| (di, dj, dz)))
+        });
+        if s > LEAF {
+            for (di, dj, dz) in children {
+                self.cube(tape, i + di, j + dj, z + dz, s);
+            }
+            return;
+        }
+        // The leaves share one evaluator of this cube's tape.
+        let mut eval = BatchEvaluator::new(tape);
+        for (di, dj, dz) in children {
+            if self.ambiguous(tape, i + di, j + dj, z + dz, s) {
+                self.leaf(&mut eval, i + di, j + dj, z + dz, s);
+            }
+        }
+    }
+
+    /// Whether the cube needs a closer look: false when it is outside the
+    /// image, hidden behind pixels filled nearer, empty, or solid (then its
+    /// pixels are filled here). Records the min/max choices of `tape` over it.
+    fn ambiguous(&mut self, tape: &Tape, i: u32, j: u32, z: u32, size: u32) -> bool {
+        if i >= self.w || j >= self.h {
+            return false;
         }
         let top = z + size; // depth value a filled top voxel gives
         let (iw, jh) = (size.min(self.w - i), size.min(self.h - j));
-        // Hidden behind pixels already filled nearer.
         if (j..j + jh).all(|jj| (i..i + iw).all(|ii| self.depths[(jj * TILE + ii) as usize] >= top)) {
-            return;
+            return false;
         }
         let (sx, sy) = ((self.x0 + i) as f64, (self.y0 + j) as f64);
         // The voxel centers of the cube span [k + 0.5, k + size − 0.5].
@@ -305,7 +336,7 @@ impl<'a> TileRender<'a> {
         );
         let v = eval_interval_choices(tape, self.vars, b, Some(&mut self.choices));
         if v.lo > 0.0 {
-            return;
+            return false;
         }
         if v.hi < 0.0 {
             for jj in j..j + jh {
@@ -314,25 +345,9 @@ impl<'a> TileRender<'a> {
                     *d = (*d).max(top);
                 }
             }
-            return;
+            return false;
         }
-        // The branches that cannot win in this cube are dropped for all
-        // that is evaluated inside it.
-        let simplified = simplify(tape, &self.choices);
-        let tape = simplified.as_ref().unwrap_or(tape);
-        if size <= LEAF {
-            let mut eval = BatchEvaluator::new(tape);
-            self.leaf(&mut eval, i, j, z, size);
-            return;
-        }
-        let s = size / 2;
-        for dz in [s, 0] {
-            for dj in [0, s] {
-                for di in [0, s] {
-                    self.cube(tape, i + di, j + dj, z + dz, s);
-                }
-            }
-        }
+        true
     }
 
     /// Evaluates the voxel centers of a leaf cube in one batch and sets the
