@@ -20,6 +20,11 @@
 //! and fills the pixels it covers at once, and an ambiguous one is split
 //! into eight, down to cubes of 4³ voxels whose 64 centers are evaluated in
 //! one batch. A cube behind pixels already filled nearer is skipped too.
+//! Each ambiguous cube simplifies the tape it was bounded with
+//! ([`isoray_shape::simplify`]): the min/max branches that cannot win in it
+//! are dropped for everything evaluated inside, and the leaves of a cube of
+//! 8³ share one evaluator of its short tape; normals are computed in the
+//! leaves with it too.
 //!
 //! ```
 //! use isoray_render::voxels::{depth_normals, VoxelView};
