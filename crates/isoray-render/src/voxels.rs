@@ -22,9 +22,9 @@
 //! one batch. A cube behind pixels already filled nearer is skipped too.
 //! Each ambiguous cube simplifies the tape it was bounded with
 //! ([`isoray_shape::simplify`]): the min/max branches that cannot win in it
-//! are dropped for everything evaluated inside, and the leaves of a cube of
-//! 8³ share one evaluator of its short tape; normals are computed in the
-//! leaves with it too.
+//! are dropped for everything evaluated inside; the leaves run their short
+//! tapes in the tile's one evaluator (a simplified tape keeps its tape's
+//! slots), and compute their normals with them too.
 //!
 //! ```
 //! use isoray_render::voxels::{depth_normals, VoxelView};
@@ -46,7 +46,7 @@
 //! assert_eq!(img.depth_at(0, 0), 0);
 //! ```
 
-use isoray_shape::eval::{BatchEvaluator, GradientMode, LANES};
+use isoray_shape::eval::{BatchEvaluator, Dual, GradientMode, PointEvaluator, LANES};
 use isoray_shape::interval::{eval_interval_choices, Choice, Interval};
 use isoray_shape::ir::Tape;
 use isoray_shape::simplify::simplify;
@@ -312,11 +312,9 @@ impl<'a> TileRender<'a> {
             }
             return;
         }
-        // The leaves share one evaluator of this cube's tape.
-        let mut eval = BatchEvaluator::new(tape);
         for (di, dj, dz) in children {
             if self.ambiguous(tape, i + di, j + dj, z + dz, s) {
-                self.leaf(&mut eval, i + di, j + dj, z + dz, s);
+                self.leaf(tape, i + di, j + dj, z + dz, s);
             }
         }
     }
@@ -357,7 +355,7 @@ impl<'a> TileRender<'a> {
 
     /// Evaluates the voxel centers of a leaf cube in one batch and sets the
     /// depth of each column from its nearest filled voxel.
-    fn leaf(&mut self, eval: &mut BatchEvaluator<f64>, i: u32, j: u32, z: u32, size: u32) {
+    fn leaf(&mut self, tape: &Tape, i: u32, j: u32, z: u32, size: u32) {
         let n = (size * size * size) as usize;
         debug_assert!(n <= LANES);
         let mut k = 0;
@@ -376,7 +374,9 @@ impl<'a> TileRender<'a> {
                 }
             }
         }
-        eval.eval(
+        // The short tape runs in the tile's evaluator (it keeps the slots).
+        self.eval.eval_variant(
+            tape,
             self.vars,
             &self.xs[..n],
             &self.ys[..n],
@@ -414,10 +414,17 @@ impl<'a> TileRender<'a> {
         for (c, &(_, b)) in set.iter().enumerate() {
             (px[c], py[c], pz[c]) = (self.xs[b], self.ys[b], self.zs[b]);
         }
-        let (mut gx, mut gy, mut gz) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        eval.gradients(self.vars, &px, &py, &pz, GradientMode::Dual, &mut gx, &mut gy, &mut gz);
+        let mut dual = PointEvaluator::<Dual>::new(tape);
         for (c, &(k, _)) in set.iter().enumerate() {
-            self.normals[k] = world_normal(&self.view.world_to_model, [gx[c], gy[c], gz[c]]);
+            let g = dual
+                .eval(
+                    self.vars,
+                    Dual::with(px[c], [1.0, 0.0, 0.0]),
+                    Dual::with(py[c], [0.0, 1.0, 0.0]),
+                    Dual::with(pz[c], [0.0, 0.0, 1.0]),
+                )
+                .d;
+            self.normals[k] = world_normal(&self.view.world_to_model, g);
             self.has_normal[k] = true;
         }
     }

@@ -377,6 +377,36 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
             xs.len() == ys.len() && ys.len() == zs.len() && zs.len() == out.len(),
             "slices of different lengths"
         );
+        let tape = self.tape;
+        self.eval_instrs(tape.instrs(), tape.output(), vars, xs, ys, zs, out);
+    }
+
+    /// Evaluates `variant`, a rewrite of this evaluator's tape with the same
+    /// constants, prologue and slots (as [`crate::simplify::simplify`]
+    /// makes), in this evaluator's storage: no allocation per variant.
+    ///
+    /// # Panics
+    /// When `variant` has another number of slots or other constants.
+    pub fn eval_variant(&mut self, variant: &Tape, vars: &[f64], xs: &[T], ys: &[T], zs: &[T], out: &mut [T]) {
+        assert!(
+            variant.slots() == self.tape.slots() && variant.constants() == self.tape.constants(),
+            "a variant must keep its tape's slots and constants"
+        );
+        self.eval_instrs(variant.instrs(), variant.output(), vars, xs, ys, zs, out);
+    }
+
+    /// Runs `instrs` (writing their result to slot `output`) over the points.
+    #[allow(clippy::too_many_arguments)]
+    fn eval_instrs(
+        &mut self,
+        instrs: &[Instr],
+        output: usize,
+        vars: &[f64],
+        xs: &[T],
+        ys: &[T],
+        zs: &[T],
+        out: &mut [T],
+    ) {
         self.bind(vars);
         let n = xs.len().min(ys.len()).min(zs.len()).min(out.len());
         let mut i = 0;
@@ -385,18 +415,17 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
             self.slots[..m].copy_from_slice(&xs[i..i + m]);
             self.slots[LANES..LANES + m].copy_from_slice(&ys[i..i + m]);
             self.slots[2 * LANES..2 * LANES + m].copy_from_slice(&zs[i..i + m]);
-            self.run(m);
-            let o = self.tape.output() * LANES;
+            self.run(instrs, m);
+            let o = output * LANES;
             out[i..i + m].copy_from_slice(&self.slots[o..o + m]);
             i += m;
         }
     }
 
-    fn run(&mut self, m: usize) {
+    fn run(&mut self, instrs: &[Instr], m: usize) {
         debug_assert!(m <= LANES);
         let base = self.slots.as_mut_ptr();
         let len = self.slots.len();
-        let instrs = self.tape.instrs();
         let mut k = 0;
         while k < instrs.len() {
             let ins = &instrs[k];

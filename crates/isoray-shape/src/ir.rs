@@ -1233,7 +1233,24 @@ impl Tape {
     /// This tape with other instructions (the same constants, prologue,
     /// inputs, slots and output slot): for rewrites such as
     /// [`crate::simplify::simplify`], which must keep the tape's invariants.
+    ///
+    /// # Panics
+    /// When an instruction names a slot beyond the tape's slots or writes a
+    /// slot it reads: evaluators rely on both.
     pub fn with_instrs(&self, instrs: Vec<Instr>) -> Tape {
+        for ins in &instrs {
+            let (out, reads): (u32, [u32; 3]) = match *ins {
+                Instr::Unary { out, a, .. } => (out, [a, a, a]),
+                Instr::Binary { out, a, b, .. } => (out, [a, b, b]),
+                Instr::Select { out, c, a, b } => (out, [c, a, b]),
+                Instr::Skip { c, .. } => (c, [c, c, c]),
+            };
+            let skip = matches!(ins, Instr::Skip { .. });
+            assert!(
+                out < self.slots && reads.iter().all(|&r| r < self.slots && (skip || r != out)),
+                "instruction {ins:?} breaks the tape's slot invariants"
+            );
+        }
         Tape {
             constants: self.constants.clone(),
             prologue: self.prologue.clone(),
