@@ -94,8 +94,6 @@ const ELIMINATION: f64 = 8e-8;
 const OVERRUN: f64 = 4.0;
 /// The smallest time box.
 const MIN_BOX: Duration = Duration::from_secs(1);
-/// The largest degree interpolation tries.
-const INTERPOLATION_MAX_DEGREE: u32 = 24;
 
 /// What the cost estimate measured and decided.
 #[derive(Debug, Clone, PartialEq)]
@@ -192,14 +190,13 @@ fn follow(
     start: Instant,
     opts: &AutoOptions,
 ) -> Result<AutoImplicit, ImplicitError> {
-    let remaining = |at: Instant| opts.time.map(|t| t.saturating_sub(at.duration_since(start)));
     let mut last: Option<ImplicitError> = None;
     let n = estimate.plan.len();
     for (i, &(method, cost)) in estimate.plan.iter().enumerate() {
         if opts.interrupt.as_ref().is_some_and(|c| c.is_cancelled()) {
             return Err(ImplicitError::Cancelled);
         }
-        let left = remaining(Instant::now());
+        let left = opts.time.map(|t| t.saturating_sub(start.elapsed()));
         if left.is_some_and(|l| l.is_zero()) {
             break;
         }
@@ -321,7 +318,7 @@ pub fn estimate(funcs: &[RatFunc], np: usize) -> Estimate {
                 };
                 plan.push((Method::Resultant, Some(dixon + modular)));
             }
-            if d <= INTERPOLATION_MAX_DEGREE {
+            if d <= InterpolationOptions::default().max_degree {
                 plan.push((Method::Interpolation, Some(INTERPOLATION * n3)));
             }
             plan.push((Method::Groebner, Some(ELIMINATION * n3)));
@@ -348,7 +345,20 @@ struct Measure {
     np: usize,
     nums: Vec<Poly<Fp>>,
     dens: Vec<Poly<Fp>>,
+    /// The product of the denominators.
+    den_product: Poly<Fp>,
     rng: u64,
+}
+
+/// Options of the small Gröbner bases of the measurement: half a second each.
+fn quick() -> GroebnerOptions {
+    GroebnerOptions {
+        budget: Budget {
+            time: Some(Duration::from_millis(500)),
+            ..Default::default()
+        },
+        ..Default::default()
+    }
 }
 
 impl Measure {
@@ -374,12 +384,16 @@ impl Measure {
             nums.push(if f.num.is_zero() { Poly::zero() } else { reduce(&f.num)? });
             dens.push(reduce(&f.den)?);
         }
+        let den_product = dens
+            .iter()
+            .fold(Poly::constant(&ring, Fp::new(1, p)), |q, d| q.mul(&ring, d));
         Some(Measure {
             ring,
             p,
             np,
             nums,
             dens,
+            den_product,
             rng: 0x9E37_79B9_7F4A_7C15 ^ p,
         })
     }
@@ -399,21 +413,13 @@ impl Measure {
     /// or `None` when there are infinitely many (or too many to count).
     fn count(&self, eqs: &[Poly<Fp>]) -> Option<u32> {
         let ring = &self.ring;
-        let mut q = self.constant(Fp::new(1, self.p));
-        for d in &self.dens {
-            q = q.mul(ring, d);
-        }
         let w = Poly::monomial(Monomial::var(self.np + 1, self.np, 1), Fp::new(1, self.p));
         let mut gens: Vec<Poly<Fp>> = eqs.iter().filter(|e| !e.is_zero()).cloned().collect();
-        gens.push(self.constant(Fp::new(1, self.p)).sub(ring, &q.mul(ring, &w)));
-        let opts = GroebnerOptions {
-            budget: Budget {
-                time: Some(Duration::from_millis(500)),
-                ..Default::default()
-            },
-            ..Default::default()
-        };
-        let (basis, _) = f4_modp(ring, &gens, &opts).ok()?;
+        gens.push(
+            self.constant(Fp::new(1, self.p))
+                .sub(ring, &self.den_product.mul(ring, &w)),
+        );
+        let (basis, _) = f4_modp(ring, &gens, &quick()).ok()?;
         if basis.iter().any(|g| g.is_constant()) {
             return Some(0);
         }
@@ -448,15 +454,8 @@ impl Measure {
             .filter(|g| !g.is_zero())
             .cloned()
             .collect();
-        let opts = GroebnerOptions {
-            budget: Budget {
-                time: Some(Duration::from_millis(500)),
-                ..Default::default()
-            },
-            ..Default::default()
-        };
         let base_points = gens.iter().all(|g| !g.is_constant()) && {
-            let (basis, _) = f4_modp(&ring, &gens, &opts).ok()?;
+            let (basis, _) = f4_modp(&ring, &gens, &quick()).ok()?;
             !basis.iter().any(|g| g.is_constant())
         };
         // The fiber of a random parameter point.
@@ -478,26 +477,26 @@ impl Measure {
         if map_degree == 0 {
             return None;
         }
-        // The section by np random hyperplanes, over the product of the denominators.
+        // The section by np random hyperplanes, over the product of the
+        // denominators: Σ aᵢ·numᵢ·Π_{j≠i} denⱼ + e·Π denⱼ.
+        let cleared: Vec<Poly<Fp>> = (0..nc)
+            .map(|i| {
+                self.dens
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != i)
+                    .fold(self.nums[i].clone(), |t, (_, d)| t.mul(&ring, d))
+            })
+            .collect();
         let mut section = Vec::new();
         for _ in 0..self.np {
             let mut eq = Poly::zero();
-            for i in 0..nc {
+            for c in &cleared {
                 let a = self.random();
-                let mut term = self.nums[i].scale(&a);
-                for (j, d) in self.dens.iter().enumerate() {
-                    if j != i {
-                        term = term.mul(&ring, d);
-                    }
-                }
-                eq = eq.add(&ring, &term);
+                eq = eq.add(&ring, &c.scale(&a));
             }
             let e = self.random();
-            let mut all = self.constant(e);
-            for d in &self.dens {
-                all = all.mul(&ring, d);
-            }
-            section.push(eq.add(&ring, &all));
+            section.push(eq.add(&ring, &self.den_product.scale(&e)));
         }
         let points = self.count(&section)?;
         if points == 0 || points % map_degree != 0 {

@@ -4,17 +4,18 @@
 //! pivots with a dense accumulator, and echelonized; its rows with new
 //! leading monomials are reduced by each other (reduced row echelon form
 //! among them, as msolve does: sparser elements, smaller later matrices —
-//! eco-11 modulo 65521 went from 1.27 s to 0.80 s) and join the basis. Pairs are installed with Gebauer and
-//! Möller's criteria (the product criterion, the chain criterion in its
-//! M, F and B_k forms), as in [`crate::groebner`].
+//! eco-11 modulo 65521 went from 1.27 s to 0.80 s) and join the basis.
+//! Pairs are installed with Gebauer and Möller's criteria (the product
+//! criterion, the chain criterion in its M, F and B_k forms), as in
+//! [`crate::groebner`].
 //!
 //! Monomials live in a hash table and rows refer to them by index, so the
 //! matrix's columns are sorted once per round and a row is a list of column
 //! numbers and `u32` residues. The table's hash is additive (a weighted sum
-//! of the exponents), so a product's hash is the sum of its factors'. The accumulator keeps residues below p² and
-//! reduces them modulo p only when it reaches their column (delayed
-//! reduction); a divisibility mask per monomial screens the search for
-//! reducers.
+//! of the exponents), so a product's hash is the sum of its factors'. The
+//! accumulator keeps residues below p² and reduces them modulo p only when
+//! it reaches their column (delayed reduction); a divisibility mask per
+//! monomial screens the search for reducers.
 //!
 //! A run can record its *trace* (Traverso's Gröbner trace carried over to
 //! F4): per matrix, as numbers only, the pivot rows that were used and the
@@ -108,6 +109,13 @@ fn hash_weight(i: usize) -> u64 {
     (x ^ (x >> 29)) | 1
 }
 
+/// Σ weights[i]·e[i] (wrapping).
+fn weighted_hash(weights: &[u64], e: &[u16]) -> u64 {
+    e.iter()
+        .zip(weights)
+        .fold(0u64, |h, (&x, &w)| h.wrapping_add(w.wrapping_mul(x as u64)))
+}
+
 /// The table slot of a hash (its high bits folded into the low ones).
 fn slot_of(h: u64, mask: usize) -> usize {
     (h ^ (h >> 32) ^ (h >> 47)) as usize & mask
@@ -133,9 +141,7 @@ impl Table {
 
     /// The hash of exponents `e`.
     fn hash(&self, e: &[u16]) -> u64 {
-        e.iter()
-            .zip(&self.weights)
-            .fold(0u64, |h, (&x, &w)| h.wrapping_add(w.wrapping_mul(x as u64)))
+        weighted_hash(&self.weights, e)
     }
 
     /// The index of the exponents in `self.scratch` (whose hash is `h`),
@@ -203,7 +209,7 @@ impl Table {
             saturated |= o;
         }
         let h = if saturated {
-            self.hash(&self.scratch.clone())
+            weighted_hash(&self.weights, &self.scratch)
         } else {
             self.hashes[k as usize].wrapping_add(hm)
         };
@@ -225,6 +231,7 @@ struct Row {
 }
 
 /// A row of a matrix: increasing column numbers (decreasing monomials).
+#[derive(Clone)]
 struct MatRow {
     cols: Rc<[u32]>,
     coefs: Rc<[u32]>,
@@ -399,7 +406,7 @@ impl<'r> F4<'r> {
     /// one's; F: one pair per lcm) and the product criterion; the old pairs
     /// that lm(h) makes redundant (B_k) are dropped.
     fn update_pairs(&mut self, h: usize, lh: &Monomial, sugar: u32) {
-        // (element, lcm, the lcm's divisibility mask, its degree).
+        // (element, lcm, the lcm's divisibility mask).
         let cand: Vec<(usize, Monomial, u64)> = (0..h)
             .filter(|&g| self.alive[g])
             .map(|g| {
@@ -770,17 +777,7 @@ impl<'r> F4<'r> {
         // and smaller matrices later. Recorded as a step keeping the leads.
         let fresh: Vec<u32> = results.into_iter().flatten().collect();
         let results: Vec<Option<u32>> = if fresh.len() > 1 {
-            let rows = fresh
-                .iter()
-                .map(|&k| {
-                    let m = &store[k as usize];
-                    MatRow {
-                        cols: m.cols.clone(),
-                        coefs: m.coefs.clone(),
-                        src: m.src,
-                    }
-                })
-                .collect();
+            let rows = fresh.iter().map(|&k| store[k as usize].clone()).collect();
             self.echelon(order.len(), &mut piv, &mut store, rows, true)?
         } else {
             fresh.into_iter().map(Some).collect()
@@ -903,11 +900,7 @@ impl<'r> F4<'r> {
         for r in alive {
             let m = self.to_matrix(r, &col_of);
             piv[m.cols[0] as usize] = store.len() as u32;
-            rows.push(MatRow {
-                cols: m.cols.clone(),
-                coefs: m.coefs.clone(),
-                src: m.src,
-            });
+            rows.push(m.clone());
             store.push(m);
         }
         self.install(reducers, &col_of, &mut piv, &mut store);

@@ -99,6 +99,17 @@ fn resultant_cross_checks_groebner_for_plane_curves() {
     }
 }
 
+/// The coordinates of the generic bicubic patch of `bench/bicubic.txt`.
+fn bicubic() -> [String; 3] {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../bench/bicubic.txt")).unwrap();
+    ["x=", "y=", "z="].map(|c| {
+        text.lines()
+            .find_map(|l| l.strip_prefix(c))
+            .unwrap_or_else(|| panic!("bench/bicubic.txt has no line {c}"))
+            .to_string()
+    })
+}
+
 /// F4 elimination keeps to its time budget on a case of minutes (a generic
 /// bicubic patch, `bench/bicubic.txt`, implicit degree 18: symbolic
 /// preprocessing of large matrices is checked too), and stops with the
@@ -112,14 +123,7 @@ fn f4_elimination_keeps_its_time_budget() {
         },
         ..Default::default()
     };
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../bench/bicubic.txt")).unwrap();
-    let coord = |c: &str| {
-        text.lines()
-            .find_map(|l| l.strip_prefix(c))
-            .unwrap_or_else(|| panic!("bench/bicubic.txt has no line {c}"))
-            .to_string()
-    };
-    let (x, y, z) = (coord("x="), coord("y="), coord("z="));
+    let [x, y, z] = bicubic();
     let start = std::time::Instant::now();
     let r = implicitize_groebner(&[&x, &y, &z], &["s", "t"], &opts);
     let took = start.elapsed();
@@ -168,9 +172,7 @@ fn auto_chooses_by_the_estimate_and_agrees_with_elimination() {
         );
         assert_eq!(a.implicit.poly.degree(), i64::from(degree));
     }
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../bench/bicubic.txt")).unwrap();
-    let coord = |c: &str| text.lines().find_map(|l| l.strip_prefix(c)).unwrap().to_string();
-    let (x, y, z) = (coord("x="), coord("y="), coord("z="));
+    let [x, y, z] = bicubic();
     let a = implicitize_auto(&[&x, &y, &z], &["s", "t"], &AutoOptions::default()).unwrap();
     assert_eq!(
         (a.method, a.estimate.degree),

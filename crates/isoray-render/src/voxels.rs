@@ -241,7 +241,8 @@ struct TileRender<'a> {
     h: u32,
     /// TILE × TILE depths.
     depths: Vec<u32>,
-    /// For the normals of pixels filled by a solid cube (the full tape).
+    /// Runs the leaves' simplified tapes (`eval_variant`) and the normals
+    /// of pixels filled by a solid cube (the full tape).
     eval: BatchEvaluator<'a, f64>,
     /// TILE × TILE normals, and whether each was computed (in a leaf, with
     /// its short tape).
@@ -282,8 +283,9 @@ impl<'a> TileRender<'a> {
         let mut z = self.view.depth;
         while z > 0 {
             let size = TILE.min(z);
-            // A partial cube at the bottom is bounded as a whole cube; the
-            // voxels below 0 are never filled (see `leaf`).
+            // The lowest cube of a column whose depth is not a multiple of
+            // TILE starts at 0 and reaches above the one before it: its
+            // voxels above the view are skipped (see `ambiguous`, `leaf`).
             let tape = self.tape;
             self.cube(tape, 0, 0, z - size, TILE);
             z -= size;
@@ -323,16 +325,18 @@ impl<'a> TileRender<'a> {
     /// image, hidden behind pixels filled nearer, empty, or solid (then its
     /// pixels are filled here). Records the min/max choices of `tape` over it.
     fn ambiguous(&mut self, tape: &Tape, i: u32, j: u32, z: u32, size: u32) -> bool {
-        if i >= self.w || j >= self.h {
+        // Voxels above the view (in the lowest cube of a column whose depth
+        // is not a multiple of TILE) are not part of it.
+        let top = (z + size).min(self.view.depth); // depth value a filled top voxel gives
+        if i >= self.w || j >= self.h || z >= top {
             return false;
         }
-        let top = z + size; // depth value a filled top voxel gives
         let (iw, jh) = (size.min(self.w - i), size.min(self.h - j));
         if (j..j + jh).all(|jj| (i..i + iw).all(|ii| self.depths[(jj * TILE + ii) as usize] >= top)) {
             return false;
         }
         let (sx, sy) = ((self.x0 + i) as f64, (self.y0 + j) as f64);
-        // The voxel centers of the cube span [k + 0.5, k + size − 0.5].
+        // The voxel centers of the cube span [k + 0.5, k + size − 0.5] (up to top − 0.5).
         let b = self.view.model_box(
             [sx + 0.5, sy + 0.5, z as f64 + 0.5],
             [sx + size as f64 - 0.5, sy + size as f64 - 0.5, (top - 1) as f64 + 0.5],
@@ -391,7 +395,7 @@ impl<'a> TileRender<'a> {
                     continue;
                 }
                 let k = ((j + dj) * TILE + i + di) as usize;
-                for dz in (0..size).rev() {
+                for dz in (0..size).rev().filter(|dz| z + dz < self.view.depth) {
                     if z + dz < self.depths[k] {
                         break;
                     }
@@ -521,6 +525,17 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A shape that fills the whole view gives every column the view's
+    /// depth, also when the depth is not a multiple of the cube size.
+    #[test]
+    fn depths_stay_within_the_view() {
+        let mut b = Builder::new();
+        let one = b.constant(-1.0);
+        let tape = b.tape(one);
+        let img = depth_normals(&tape, &[], &VoxelView::from_view(20, 20, 40, 1.0, 0.0, 0.0, 0.0));
+        assert!(img.depths.iter().all(|&d| d == 40), "{:?}", &img.depths[..5]);
     }
 
     /// A sphere's normals point away from its center, towards the viewer.

@@ -930,17 +930,22 @@ fn uniform_values<'a>(
     }
 }
 
+/// The directory files named in the scene `scene_name` are relative to
+/// (empty, the working directory, for a scene without one).
+fn scene_dir(scene_name: &str) -> std::path::PathBuf {
+    Path::new(scene_name)
+        .parent()
+        .filter(|p| p.is_dir())
+        .map(Path::to_path_buf)
+        .unwrap_or_default()
+}
+
 /// The shape text of `[surface.NAME] vm = "FILE"`: fidget's `.vm` tape
 /// format read from FILE (relative to the scene file's directory) and
 /// translated by [`isoray_shape::vm::vm_to_shape_text`]; errors name the
 /// file, line and column.
 fn vm_surface_text(src: &Sources, loc: &Located, file: &str, ctx: &str) -> Result<String> {
-    let path = Path::new(&src.path)
-        .parent()
-        .filter(|p| p.is_dir())
-        .map(Path::to_path_buf)
-        .unwrap_or_default()
-        .join(file);
+    let path = scene_dir(&src.path).join(file);
     let text = std::fs::read_to_string(&path).map_err(|e| {
         src.error(
             loc.origin,
@@ -964,11 +969,7 @@ fn vm_surface_text(src: &Sources, loc: &Located, file: &str, ctx: &str) -> Resul
 /// the scene file's directory.
 pub(crate) fn environment(src: &Sources, v: &Located, scene_name: &str) -> Result<Environment> {
     let mut r = Reader::new(src, v, "environment")?;
-    let base = Path::new(scene_name)
-        .parent()
-        .filter(|p| p.is_dir())
-        .map(Path::to_path_buf)
-        .unwrap_or_default();
+    let base = scene_dir(scene_name);
     let read = |src: &Sources, loc: &Located, text: &str, key: &str| -> Result<RgbImage> {
         let path = base.join(text);
         crate::env::read_image(&path).map_err(|e| {
