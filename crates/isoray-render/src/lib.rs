@@ -32,6 +32,7 @@ pub mod camera;
 mod dents;
 pub mod meshes;
 pub mod output;
+mod prune;
 pub mod sequence;
 pub mod tiles;
 pub mod trace;
@@ -380,28 +381,37 @@ fn render_into(
     let ctx = Ctx::new(scene, cam);
     let done = AtomicU64::new(0);
     let total = tiles.len() as u64;
-    let outs: Vec<Option<TileOut>> = tiles
-        .par_iter()
-        .map_init(
-            || Worker::new(&ctx),
-            |wk, &(x0, y0)| {
-                if opts.cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
-                    return None;
-                }
-                let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
-                let out = wk.tile(&ctx, x0, y0, tw, th, opts.aovs, pass);
-                let clip = out.clip(region);
-                sink.tile(&TileImage {
-                    pass,
-                    region: clip.0,
-                    color: &clip.1,
-                });
-                if let Some(p) = &opts.progress {
-                    p.update(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-                }
-                Some(out)
-            },
-        )
+    // One worker per thread, taking the next tile as it finishes one: a
+    // worker's pruned fields (their octrees of simplified tapes) then serve
+    // every tile its thread renders.
+    let next = AtomicU64::new(0);
+    let slots: Vec<std::sync::Mutex<Option<TileOut>>> = tiles.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    let threads = rayon::current_num_threads().min(tiles.len()).max(1);
+    (0..threads).into_par_iter().for_each(|_| {
+        let mut wk = Worker::new(&ctx);
+        loop {
+            let k = next.fetch_add(1, Ordering::Relaxed) as usize;
+            let Some(&(x0, y0)) = tiles.get(k) else { break };
+            if opts.cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
+                break;
+            }
+            let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
+            let out = wk.tile(&ctx, x0, y0, tw, th, opts.aovs, pass);
+            let clip = out.clip(region);
+            sink.tile(&TileImage {
+                pass,
+                region: clip.0,
+                color: &clip.1,
+            });
+            if let Some(p) = &opts.progress {
+                p.update(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+            }
+            *slots[k].lock().unwrap_or_else(|e| e.into_inner()) = Some(out);
+        }
+    });
+    let outs: Vec<Option<TileOut>> = slots
+        .into_iter()
+        .map(|m| m.into_inner().unwrap_or_else(|e| e.into_inner()))
         .collect();
     if opts.cancel.as_ref().is_some_and(|c| c.is_cancelled()) || outs.iter().any(Option::is_none) {
         return Err(Cancelled);
@@ -490,6 +500,10 @@ struct Ctx<'s> {
     /// Every material as a surface, by material index (for checkers).
     material_surfaces: Vec<MaterialSample>,
     gradient: GradientMode,
+    /// The cube every traced point lies in (the camera's reach, then
+    /// shadow rays' and ambient-occlusion samples'): the domain of the
+    /// pruned fields; None with `render.prune` off.
+    domain: Option<([f64; 3], f64)>,
 }
 
 impl<'s> Ctx<'s> {
@@ -512,9 +526,13 @@ impl<'s> Ctx<'s> {
             .map(|&m| MaterialSample::from(&scene.materials[m]))
             .collect();
         let material_surfaces = scene.materials.iter().map(MaterialSample::from).collect();
+        let r = &scene.render;
+        let reach = r.max_distance + r.shadow_max_distance + r.ao_step * r.ao_samples as f64 + 1.0;
+        let domain = r.prune.then(|| (cam.origin().to_array(), reach));
         Ctx {
             scene,
             cam,
+            domain,
             surfaces,
             material_of,
             material_surfaces,
@@ -573,17 +591,21 @@ impl<'s> Worker<'s> {
         } else {
             Vec::new()
         };
+        let field = |tape: &'s isoray_shape::Tape| match ctx.domain {
+            Some((center, half)) => Field::pruned(tape, vars, center, half),
+            None => Field::new(tape, vars),
+        };
         Worker {
-            scene_eval: Field::new(ctx.scene.shape.tape(), vars),
-            surf_eval: Field::new(ctx.scene.derived().surfaces.tape(), vars),
+            scene_eval: field(ctx.scene.shape.tape()),
+            surf_eval: field(ctx.scene.derived().surfaces.tape()),
             counts: RayCounts::default(),
-            rest_eval: ctx.scene.derived().rest.as_ref().map(|r| Field::new(r.tape(), vars)),
+            rest_eval: ctx.scene.derived().rest.as_ref().map(|r| field(r.tape())),
             caps: Vec::new(),
             tile_origin: (0, 0),
             shadow_evals: ctx.scene.derived().shadow.as_ref().map(|sh| whitted::ShadowEvals {
-                opaque: Field::new(sh.opaque.tape(), vars),
-                clear: Field::new(sh.transparent.tape(), vars),
-                clear_surfaces: Field::new(sh.transparent_surfaces.tape(), vars),
+                opaque: field(sh.opaque.tape()),
+                clear: field(sh.transparent.tape()),
+                clear_surfaces: field(sh.transparent_surfaces.tape()),
             }),
             object_evals,
             scratch: Scratch::default(),

@@ -5,26 +5,55 @@
 use isoray_scene::{March, RenderSettings, ShadowMode, StepLimit};
 use isoray_shape::{BatchEvaluator, GradientMode, Tape};
 
+use crate::prune::{prunable, Pruner};
+
 /// A distance field ready to evaluate in a frame: a batch evaluator of its
-/// tape and the frame's runtime inputs (the time and the parameters).
-#[derive(Debug, Clone)]
+/// tape and the frame's runtime inputs (the time and the parameters), and,
+/// when made by [`Field::pruned`], the tapes simplified for the regions of
+/// space the evaluations reach (see [`crate::prune`]).
+#[derive(Debug)]
 pub struct Field<'s> {
     eval: BatchEvaluator<'s, f32>,
     vars: &'s [f64],
+    prune: Option<Box<Pruner<'s>>>,
 }
 
 impl<'s> Field<'s> {
-    /// The field of `tape` with the inputs `vars`.
+    /// The field of `tape` with the inputs `vars`: every evaluation runs
+    /// the full tape.
     pub fn new(tape: &'s Tape, vars: &'s [f64]) -> Self {
         Field {
             eval: BatchEvaluator::new(tape),
             vars,
+            prune: None,
         }
+    }
+
+    /// The field of `tape` with the inputs `vars`, each evaluation inside
+    /// the cube of half-size `half` around `center` running the tape
+    /// simplified for a region around it (the same values, bit for bit);
+    /// as [`Field::new`] when the tape has nothing to simplify.
+    pub fn pruned(tape: &'s Tape, vars: &'s [f64], center: [f64; 3], half: f64) -> Self {
+        let ok = prunable(tape) && half.is_finite() && half > 0.0 && center.iter().all(|c| c.is_finite());
+        Field {
+            eval: BatchEvaluator::new(tape),
+            vars,
+            prune: ok.then(|| Box::new(Pruner::new(tape, vars, center, half))),
+        }
+    }
+
+    /// Tape instructions run by pruned evaluations so far, summed over
+    /// points (None when not pruned).
+    pub fn instructions_run(&self) -> Option<u64> {
+        self.prune.as_ref().map(|p| p.instrs_run)
     }
 
     /// Distances at the points into `out`.
     pub fn eval(&mut self, xs: &[f32], ys: &[f32], zs: &[f32], out: &mut [f32]) {
-        self.eval.eval(self.vars, xs, ys, zs, out);
+        match &mut self.prune {
+            Some(p) => p.eval(&mut self.eval, self.vars, xs, ys, zs, out),
+            None => self.eval.eval(self.vars, xs, ys, zs, out),
+        }
     }
 
     /// Gradients at the points (see [`BatchEvaluator::gradients`]).
@@ -39,7 +68,10 @@ impl<'s> Field<'s> {
         gy: &mut [f32],
         gz: &mut [f32],
     ) {
-        self.eval.gradients(self.vars, xs, ys, zs, mode, gx, gy, gz);
+        match &mut self.prune {
+            Some(p) => p.gradients(&mut self.eval, self.vars, xs, ys, zs, mode, gx, gy, gz),
+            None => self.eval.gradients(self.vars, xs, ys, zs, mode, gx, gy, gz),
+        }
     }
 }
 

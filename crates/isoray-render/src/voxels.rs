@@ -47,7 +47,7 @@
 //! ```
 
 use isoray_shape::eval::{BatchEvaluator, Dual, GradientMode, PointEvaluator, LANES};
-use isoray_shape::interval::{eval_interval_choices, Choice, Interval};
+use isoray_shape::interval::{Choice, Interval, IntervalEvaluator};
 use isoray_shape::ir::Tape;
 use isoray_shape::simplify::simplify;
 use rayon::prelude::*;
@@ -248,6 +248,8 @@ struct TileRender<'a> {
     /// its short tape).
     normals: Vec<[f32; 3]>,
     has_normal: Vec<bool>,
+    /// Bounds the cubes (the full tape or a simplified one).
+    intervals: IntervalEvaluator<'a>,
     /// Scratch: the min/max choices of the last interval evaluation.
     choices: Vec<Choice>,
     xs: Vec<f64>,
@@ -270,6 +272,7 @@ impl<'a> TileRender<'a> {
             eval: BatchEvaluator::new(tape),
             normals: vec![[0.0; 3]; (TILE * TILE) as usize],
             has_normal: vec![false; (TILE * TILE) as usize],
+            intervals: IntervalEvaluator::new(tape, vars),
             choices: Vec::new(),
             xs: vec![0.0; LANES],
             ys: vec![0.0; LANES],
@@ -341,7 +344,7 @@ impl<'a> TileRender<'a> {
             [sx + 0.5, sy + 0.5, z as f64 + 0.5],
             [sx + size as f64 - 0.5, sy + size as f64 - 0.5, (top - 1) as f64 + 0.5],
         );
-        let v = eval_interval_choices(tape, self.vars, b, Some(&mut self.choices));
+        let v = self.intervals.eval(tape, b, Some(&mut self.choices));
         if v.lo > 0.0 {
             return false;
         }

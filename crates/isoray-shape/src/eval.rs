@@ -389,7 +389,7 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
     /// When `variant` has another number of slots or other constants.
     pub fn eval_variant(&mut self, variant: &Tape, vars: &[f64], xs: &[T], ys: &[T], zs: &[T], out: &mut [T]) {
         assert!(
-            variant.slots() == self.tape.slots() && variant.constants() == self.tape.constants(),
+            variant.same_frame(self.tape),
             "a variant must keep its tape's slots and constants"
         );
         self.eval_instrs(variant.instrs(), variant.output(), vars, xs, ys, zs, out);
@@ -484,6 +484,25 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
         gy: &mut [T],
         gz: &mut [T],
     ) {
+        self.gradients_variant(None, vars, xs, ys, zs, mode, gx, gy, gz);
+    }
+
+    /// [`Self::gradients`] of `variant`, a rewrite of this evaluator's tape
+    /// (see [`Self::eval_variant`]) valid wherever the stencil reaches; the
+    /// full tape when `None`. Dual numbers always run the full tape.
+    #[allow(clippy::too_many_arguments)]
+    pub fn gradients_variant(
+        &mut self,
+        variant: Option<&Tape>,
+        vars: &[f64],
+        xs: &[T],
+        ys: &[T],
+        zs: &[T],
+        mode: GradientMode,
+        gx: &mut [T],
+        gy: &mut [T],
+        gz: &mut [T],
+    ) {
         let n = xs
             .len()
             .min(ys.len())
@@ -526,7 +545,10 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
                 sy[i] = ys[i] + oy;
                 sz[i] = zs[i] + oz;
             }
-            self.eval(vars, sx, sy, sz, sf);
+            match variant {
+                Some(v) => self.eval_variant(v, vars, sx, sy, sz, sf),
+                None => self.eval(vars, sx, sy, sz, sf),
+            }
             let (wx, wy, wz) = (T::from_f64(w[0]), T::from_f64(w[1]), T::from_f64(w[2]));
             for i in 0..n {
                 let f = sf[i] * inv_h;

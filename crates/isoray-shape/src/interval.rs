@@ -246,72 +246,115 @@ pub fn eval_interval(tape: &Tape, vars: &[f64], x: Interval, y: Interval, z: Int
     eval_interval_choices(tape, vars, [x, y, z], None)
 }
 
-/// Which operands of a `min` or `max` can give its value over a box.
+/// Which operands of a `min`, `max` or select can give its value over a box.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Choice {
-    /// Either (or another instruction than min and max).
+    /// Either (or another instruction than min, max and select).
     Both,
-    /// Only the left operand: its interval lies strictly on the winning side.
+    /// Only the left operand (of a select: the `c > 0` branch): its
+    /// interval lies strictly on the winning side.
     Left,
-    /// Only the right operand.
+    /// Only the right operand (of a select: the other branch).
     Right,
 }
 
 /// [`eval_interval`] over the box `xyz`, also recording in `choices` (one
-/// entry per instruction, when given) which operands of each `min` and
-/// `max` can win anywhere in the box: [`crate::simplify::simplify`] drops
-/// the others.
+/// entry per instruction, when given) which operands of each `min`, `max`
+/// and select can give its value anywhere in the box:
+/// [`crate::simplify::simplify`] drops the others. Allocates its working
+/// memory; [`IntervalEvaluator`] reuses it over many boxes.
 pub fn eval_interval_choices(
     tape: &Tape,
     vars: &[f64],
     xyz: [Interval; 3],
-    mut choices: Option<&mut Vec<Choice>>,
+    choices: Option<&mut Vec<Choice>>,
 ) -> Interval {
-    let mut s = vec![WHOLE; tape.slots()];
-    s[..3].copy_from_slice(&xyz);
-    for &(k, v) in tape.constants() {
-        s[k as usize] = Interval::point(v);
-    }
-    let mut scratch = Vec::new();
-    for (k, v) in tape.prologue().run(vars, &mut scratch) {
-        s[k] = Interval::point(v);
-    }
-    if let Some(c) = choices.as_deref_mut() {
-        c.clear();
-    }
-    for ins in tape.instrs() {
-        let mut choice = Choice::Both;
-        match *ins {
-            // Lazy regions are evaluated: their select takes the hull where c may be ≤ 0.
-            Instr::Skip { .. } => {}
-            Instr::Unary { op, out, a } => s[out as usize] = Interval::unary(op, s[a as usize]),
-            Instr::Binary { op, out, a, b } => {
-                let (ia, ib) = (s[a as usize], s[b as usize]);
-                choice = match op {
-                    BinOp::Min if ia.hi < ib.lo => Choice::Left,
-                    BinOp::Min if ib.hi < ia.lo => Choice::Right,
-                    BinOp::Max if ia.lo > ib.hi => Choice::Left,
-                    BinOp::Max if ib.lo > ia.hi => Choice::Right,
-                    _ => Choice::Both,
-                };
-                s[out as usize] = Interval::binary(op, ia, ib);
-            }
-            Instr::Select { out, c, a, b } => {
-                let ci = s[c as usize];
-                s[out as usize] = if ci.lo > 0.0 {
-                    s[a as usize]
-                } else if ci.hi <= 0.0 {
-                    s[b as usize]
-                } else {
-                    Interval::hull(s[a as usize], s[b as usize])
-                };
-            }
+    IntervalEvaluator::new(tape, vars).eval(tape, xyz, choices)
+}
+
+/// Interval evaluation of one tape and its rewrites (the simplified tapes
+/// of [`crate::simplify::simplify`]) over many boxes, with the inputs fixed
+/// when it is made: the constants and the prologue's values are written
+/// once, and each box costs only the instructions of the tape evaluated.
+#[derive(Debug, Clone)]
+pub struct IntervalEvaluator<'t> {
+    tape: &'t Tape,
+    slots: Vec<Interval>,
+}
+
+/// How far apart two operands' intervals must be for one to win a `min` or
+/// `max` over the whole box: a relative margin, so that the f32 evaluators
+/// (whose rounding differs from these f64 bounds by far less) make the
+/// same choice at every point of the box.
+fn separated(below: f64, above: f64) -> bool {
+    below < above - 1e-5 * (below.abs() + above.abs())
+}
+
+impl<'t> IntervalEvaluator<'t> {
+    /// An evaluator of `tape` (and its rewrites) with the inputs `vars`.
+    pub fn new(tape: &'t Tape, vars: &[f64]) -> Self {
+        let mut s = vec![WHOLE; tape.slots()];
+        for &(k, v) in tape.constants() {
+            s[k as usize] = Interval::point(v);
         }
+        let mut scratch = Vec::new();
+        for (k, v) in tape.prologue().run(vars, &mut scratch) {
+            s[k] = Interval::point(v);
+        }
+        IntervalEvaluator { tape, slots: s }
+    }
+
+    /// Bounds of `variant` (this evaluator's tape or a rewrite of it, see
+    /// [`Tape::same_frame`]) over the box `xyz`, recording the choices of
+    /// its min, max and select instructions in `choices` when given (see
+    /// [`eval_interval_choices`]).
+    ///
+    /// # Panics
+    /// When `variant` is not a rewrite of this evaluator's tape.
+    pub fn eval(&mut self, variant: &Tape, xyz: [Interval; 3], mut choices: Option<&mut Vec<Choice>>) -> Interval {
+        assert!(
+            variant.same_frame(self.tape),
+            "a variant must keep its tape's slots and constants"
+        );
+        let s = &mut self.slots;
+        s[..3].copy_from_slice(&xyz);
         if let Some(c) = choices.as_deref_mut() {
-            c.push(choice);
+            c.clear();
         }
+        for ins in variant.instrs() {
+            let mut choice = Choice::Both;
+            match *ins {
+                // Lazy regions are evaluated: their select takes the hull where c may be ≤ 0.
+                Instr::Skip { .. } => {}
+                Instr::Unary { op, out, a } => s[out as usize] = Interval::unary(op, s[a as usize]),
+                Instr::Binary { op, out, a, b } => {
+                    let (ia, ib) = (s[a as usize], s[b as usize]);
+                    choice = match op {
+                        BinOp::Min if separated(ia.hi, ib.lo) => Choice::Left,
+                        BinOp::Min if separated(ib.hi, ia.lo) => Choice::Right,
+                        BinOp::Max if separated(ib.hi, ia.lo) => Choice::Left,
+                        BinOp::Max if separated(ia.hi, ib.lo) => Choice::Right,
+                        _ => Choice::Both,
+                    };
+                    s[out as usize] = Interval::binary(op, ia, ib);
+                }
+                Instr::Select { out, c, a, b } => {
+                    let ci = s[c as usize];
+                    (s[out as usize], choice) = if ci.lo > 0.0 {
+                        (s[a as usize], Choice::Left)
+                    } else if ci.hi <= 0.0 {
+                        (s[b as usize], Choice::Right)
+                    } else {
+                        (Interval::hull(s[a as usize], s[b as usize]), Choice::Both)
+                    };
+                }
+            }
+            if let Some(c) = choices.as_deref_mut() {
+                c.push(choice);
+            }
+        }
+        s[variant.output()]
     }
-    s[tape.output()]
 }
 
 #[cfg(test)]

@@ -8,6 +8,7 @@
 //! evaluation order, with slots allocated for a small working set.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// The input index of the time `t` (seconds): the first entry of every
 /// variable slice. Scene parameters follow it.
@@ -956,18 +957,18 @@ pub(crate) struct InputCache {
 impl InputCache {
     /// True (and remembers `vars`) when the tape's inputs differ from the last call's.
     pub(crate) fn changed(&mut self, tape: &Tape, vars: &[f64]) -> bool {
-        if tape.prologue.is_empty() {
+        if tape.prologue().is_empty() {
             return false;
         }
         let bits = |v: u32| vars.get(v as usize).copied().unwrap_or(f64::NAN).to_bits();
         if self.valid
-            && self.last.len() == tape.vars.len()
-            && tape.vars.iter().zip(&self.last).all(|(&v, &l)| bits(v) == l)
+            && self.last.len() == tape.vars().len()
+            && tape.vars().iter().zip(&self.last).all(|(&v, &l)| bits(v) == l)
         {
             return false;
         }
         self.last.clear();
-        self.last.extend(tape.vars.iter().map(|&v| bits(v)));
+        self.last.extend(tape.vars().iter().map(|&v| bits(v)));
         self.valid = true;
         true
     }
@@ -981,12 +982,22 @@ impl InputCache {
 /// reads, so evaluators may borrow inputs and output disjointly.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tape {
-    constants: Vec<(u32, f64)>,
-    prologue: Prologue,
-    vars: Vec<u32>,
+    /// What every rewrite of the tape ([`Tape::with_instrs`]) shares with
+    /// it: constants, prologue and inputs, behind one pointer so that a
+    /// simplified tape costs only its instructions and an evaluator can
+    /// check at once that a variant is its own tape's.
+    frame: Arc<Frame>,
     instrs: Vec<Instr>,
     slots: u32,
     output: u32,
+}
+
+/// The part of a [`Tape`] its rewrites share.
+#[derive(Debug, Clone, PartialEq, Default)]
+struct Frame {
+    constants: Vec<(u32, f64)>,
+    prologue: Prologue,
+    vars: Vec<u32>,
 }
 
 impl Tape {
@@ -1191,9 +1202,11 @@ impl Tape {
         }
         let output_slot = slot_of[output.0 as usize];
         Tape {
-            constants,
-            prologue,
-            vars,
+            frame: Arc::new(Frame {
+                constants,
+                prologue,
+                vars,
+            }),
             instrs,
             slots: next_slot,
             output: output_slot,
@@ -1202,16 +1215,16 @@ impl Tape {
 
     /// Constants and the slots they live in.
     pub fn constants(&self) -> &[(u32, f64)] {
-        &self.constants
+        &self.frame.constants
     }
     /// The part computed from inputs alone, once per set of input values.
     pub fn prologue(&self) -> &Prologue {
-        &self.prologue
+        &self.frame.prologue
     }
     /// The inputs the tape reads (sorted indices into the variable slice);
     /// empty for a tape of the coordinates alone.
     pub fn vars(&self) -> &[u32] {
-        &self.vars
+        &self.frame.vars
     }
     /// This tape with its inputs fixed at `vars`: the prologue's values
     /// become constants, so the result reads no input and computes exactly
@@ -1219,14 +1232,16 @@ impl Tape {
     /// whole shape at one moment (the mesher, exports).
     pub fn bind(&self, vars: &[f64]) -> Tape {
         let mut t = self.clone();
-        if self.prologue.is_empty() {
+        if self.frame.prologue.is_empty() {
             return t;
         }
         let mut scratch = Vec::new();
-        t.constants
-            .extend(self.prologue.run(vars, &mut scratch).map(|(k, v)| (k as u32, v)));
-        t.prologue = Prologue::default();
-        t.vars.clear();
+        let mut constants = self.frame.constants.clone();
+        constants.extend(self.frame.prologue.run(vars, &mut scratch).map(|(k, v)| (k as u32, v)));
+        t.frame = Arc::new(Frame {
+            constants,
+            ..Frame::default()
+        });
         t
     }
 
@@ -1252,18 +1267,24 @@ impl Tape {
             );
         }
         Tape {
-            constants: self.constants.clone(),
-            prologue: self.prologue.clone(),
-            vars: self.vars.clone(),
+            frame: Arc::clone(&self.frame),
             instrs,
             slots: self.slots,
             output: self.output,
         }
     }
 
+    /// True when `other` is a rewrite of this tape (or the other way
+    /// round): the same constants, prologue, inputs and slots, so one
+    /// evaluator's storage serves both. Cheap for tapes made by
+    /// [`Tape::with_instrs`], which share them.
+    pub fn same_frame(&self, other: &Tape) -> bool {
+        self.slots == other.slots && (Arc::ptr_eq(&self.frame, &other.frame) || self.frame == other.frame)
+    }
+
     /// True when the tape reads input `var`.
     pub fn reads(&self, var: u32) -> bool {
-        self.vars.binary_search(&var).is_ok()
+        self.frame.vars.binary_search(&var).is_ok()
     }
     /// Instructions in evaluation order.
     pub fn instrs(&self) -> &[Instr] {

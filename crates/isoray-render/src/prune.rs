@@ -1,0 +1,466 @@
+//! Tapes specialised to regions of space (fidget's tape simplification,
+//! for the sphere tracer).
+//!
+//! A field's domain (a cube around the camera that every ray stays in) is
+//! an octree built lazily, as points reach it: each cell holds its
+//! parent's tape simplified for the cell's box
+//! ([`isoray_shape::simplify::Simplifier`]: the branches of `min`, `max`
+//! and selects that cannot win anywhere in the box dropped, with all that
+//! only they needed). A point is evaluated with the tape of the deepest
+//! cell that holds it, which gives the same value as the full tape there,
+//! bit for bit, so images do not change; a batch of points is grouped by
+//! cell, each group one batch call of its short tape. Cells stop dividing
+//! at [`MAX_DEPTH`] or once their tape is [`SHORT`] instructions long.
+//!
+//! Every evaluation in a region reuses the work done for it, whatever the
+//! ray: primary, shadow, reflected and refracted rays, ambient-occlusion
+//! samples and normals. The tree belongs to one worker thread and lives
+//! for a frame.
+//!
+//! A tape with no `min`, `max` or select has nothing to simplify and is
+//! never pruned, nor is a tape shorter than [`MIN_TAPE`].
+
+use isoray_shape::interval::{Choice, Interval, IntervalEvaluator};
+use isoray_shape::ir::{BinOp, Instr};
+use isoray_shape::simplify::Simplifier;
+use isoray_shape::{BatchEvaluator, GradientMode, Tape};
+
+/// Levels of cells below the domain cube, at most.
+pub const MAX_DEPTH: u8 = 10;
+
+/// Cells whose tape is at most this long are not divided further.
+pub const SHORT: usize = 24;
+
+/// No cell (a child not made yet).
+const NONE: u32 = u32::MAX;
+
+/// The full tape (a cell where nothing simplifies).
+const FULL: u32 = u32::MAX;
+
+/// A cell of the octree.
+#[derive(Debug, Clone)]
+struct Cell {
+    /// Index into `tapes`, or [`FULL`].
+    tape: u32,
+    /// The eight children (x, y, z bits of the index: the upper half
+    /// along that axis), [`NONE`] until made; none for a leaf.
+    kids: Option<[u32; 8]>,
+    /// Per child not made yet, the points this cell evaluated for want of
+    /// it (see [`PATIENCE`]).
+    visits: [u32; 8],
+}
+
+/// A child is made once its parent has evaluated this many points that
+/// fall in it: making one (interval evaluation and simplification of the
+/// parent's tape) costs about as much as evaluating that tape at dozens
+/// of points in small groups, so cells that few points reach are not worth
+/// it. (On the 1,000-sphere scene of `bench/tracer.sh`, 16 was 1.4× slower
+/// than 64; 256 and 1000 were within the machine's noise of it.)
+pub const PATIENCE: u32 = 64;
+
+/// The lazily built octree of one field (see the module docs).
+#[derive(Debug)]
+pub(crate) struct Pruner<'s> {
+    tape: &'s Tape,
+    intervals: IntervalEvaluator<'s>,
+    choices: Vec<Choice>,
+    simplifier: Simplifier,
+    /// The domain cube.
+    center: [f64; 3],
+    half: f64,
+    cells: Vec<Cell>,
+    tapes: Vec<Tape>,
+    /// Scratch: (cell << 32 | point) keys, and gathered points.
+    keys: Vec<u64>,
+    gather: [Vec<f32>; 7],
+    /// Tape instructions run, summed over points (for tests and stats).
+    pub(crate) instrs_run: u64,
+}
+
+/// Tapes shorter than this are not pruned: looking up cells and grouping
+/// points costs more than the instructions it saves (the gallery's 357
+/// instructions ran 5 % slower pruned, the showcase's 127 and the optics
+/// scene's 28 up to 1.5× slower).
+pub const MIN_TAPE: usize = 500;
+
+/// True when the tape is long enough to prune ([`MIN_TAPE`]) and has
+/// something the simplifier can drop.
+pub(crate) fn prunable(tape: &Tape) -> bool {
+    if tape.len() < MIN_TAPE {
+        return false;
+    }
+    let choosable = |i: &Instr| {
+        matches!(
+            i,
+            Instr::Binary {
+                op: BinOp::Min | BinOp::Max,
+                ..
+            } | Instr::Select { .. }
+        )
+    };
+    let skips = tape.instrs().iter().any(|i| matches!(i, Instr::Skip { .. }));
+    !skips && tape.instrs().iter().any(choosable)
+}
+
+impl<'s> Pruner<'s> {
+    /// The octree of `tape` (with the inputs `vars`) over the cube of
+    /// half-size `half` around `center`.
+    pub(crate) fn new(tape: &'s Tape, vars: &[f64], center: [f64; 3], half: f64) -> Self {
+        let mut p = Pruner {
+            tape,
+            intervals: IntervalEvaluator::new(tape, vars),
+            choices: Vec::new(),
+            simplifier: Simplifier::default(),
+            center,
+            half,
+            cells: Vec::new(),
+            tapes: Vec::new(),
+            keys: Vec::new(),
+            gather: Default::default(),
+            instrs_run: 0,
+        };
+        let root = p.make_cell(FULL, center, half, 0);
+        p.cells.push(root);
+        p
+    }
+
+    /// The tape index of a cell ([`FULL`] for [`NONE`], outside the domain).
+    fn cell_tape(&self, cell: u32) -> u32 {
+        if cell == NONE {
+            FULL
+        } else {
+            self.cells[cell as usize].tape
+        }
+    }
+
+    fn tape_of(&self, t: u32) -> &Tape {
+        if t == FULL {
+            self.tape
+        } else {
+            &self.tapes[t as usize]
+        }
+    }
+
+    /// A cell of the given box and depth, its tape simplified from `parent`.
+    fn make_cell(&mut self, parent: u32, c: [f64; 3], h: f64, depth: u8) -> Cell {
+        // Padded for the rounding of f32 points near the cell's faces.
+        let pad = 1e-5 * h + 1e-6 * c.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let bx: [Interval; 3] = std::array::from_fn(|k| Interval::new(c[k] - h - pad, c[k] + h + pad));
+        let parent_tape = if parent == FULL {
+            self.tape
+        } else {
+            &self.tapes[parent as usize]
+        };
+        self.intervals.eval(parent_tape, bx, Some(&mut self.choices));
+        let tape = match self.simplifier.simplify(parent_tape, &self.choices) {
+            Some(t) if t.len() < parent_tape.len() => {
+                self.tapes.push(t);
+                self.tapes.len() as u32 - 1
+            }
+            _ => parent,
+        };
+        let leaf = depth >= MAX_DEPTH || self.tape_of(tape).len() <= SHORT;
+        Cell {
+            tape,
+            kids: (!leaf).then_some([NONE; 8]),
+            visits: [0; 8],
+        }
+    }
+
+    /// The deepest cell holding the cube of half-size `margin` around `p`
+    /// (made as needed); [`NONE`] when `p` is outside the domain (the
+    /// root's tape holds only inside it).
+    fn cell_of(&mut self, p: [f32; 3], margin: f64) -> u32 {
+        let p = p.map(|x| x as f64);
+        let (mut c, mut h) = (self.center, self.half);
+        let inside = |k: usize| (p[k] - c[k]).abs() + margin <= h;
+        if !(inside(0) && inside(1) && inside(2)) {
+            return NONE;
+        }
+        let mut cell = 0u32;
+        let mut depth = 0u8;
+        loop {
+            let Some(kids) = self.cells[cell as usize].kids else {
+                return cell;
+            };
+            let h2 = 0.5 * h;
+            let mut i = 0;
+            let mut cc = c;
+            for k in 0..3 {
+                // Inside the child only if the whole margin is.
+                let off = p[k] - c[k];
+                if off.abs() < margin {
+                    return cell;
+                }
+                if off >= 0.0 {
+                    i |= 1 << k;
+                    cc[k] += h2;
+                } else {
+                    cc[k] -= h2;
+                }
+            }
+            depth += 1;
+            let mut kid = kids[i];
+            if kid == NONE {
+                let v = &mut self.cells[cell as usize].visits[i];
+                if *v < PATIENCE {
+                    *v += 1;
+                    return cell;
+                }
+                let parent = self.cells[cell as usize].tape;
+                let made = self.make_cell(parent, cc, h2, depth);
+                kid = self.cells.len() as u32;
+                self.cells.push(made);
+                if let Some(k) = &mut self.cells[cell as usize].kids {
+                    k[i] = kid;
+                }
+            }
+            (cell, c, h) = (kid, cc, h2);
+        }
+    }
+
+    /// Groups the points by the cell whose tape evaluates them (within
+    /// `margin` of the point): `self.keys`, sorted. Returns the cell when
+    /// they all share one.
+    fn group(&mut self, xs: &[f32], ys: &[f32], zs: &[f32], margin: f64) -> Option<u32> {
+        self.keys.clear();
+        let mut same = true;
+        let mut first = NONE;
+        for i in 0..xs.len() {
+            let c = self.cell_of([xs[i], ys[i], zs[i]], margin);
+            if i == 0 {
+                first = c;
+            }
+            same &= c == first;
+            self.keys.push(((c as u64) << 32) | i as u64);
+        }
+        if same {
+            return Some(first);
+        }
+        self.keys.sort_unstable();
+        None
+    }
+
+    /// The runs of `self.keys` (after [`Self::group`]): (start, end, tape).
+    fn runs(&self) -> Vec<(usize, usize, u32)> {
+        let mut runs = Vec::new();
+        let m = self.keys.len();
+        let mut start = 0;
+        while start < m {
+            let cell = self.keys[start] >> 32;
+            let mut end = start + 1;
+            while end < m && self.keys[end] >> 32 == cell {
+                end += 1;
+            }
+            runs.push((start, end, self.cell_tape(cell as u32)));
+            start = end;
+        }
+        runs
+    }
+
+    /// Copies the points of keys `run` (after [`Self::group`]) from `src`
+    /// into `dst`, in key order.
+    fn gather_points(&self, run: std::ops::Range<usize>, src: [&[f32]; 3], dst: [&mut Vec<f32>; 3]) {
+        for (s, d) in src.into_iter().zip(dst) {
+            d.clear();
+            d.extend(self.keys[run.clone()].iter().map(|&k| s[(k & 0xffff_ffff) as usize]));
+        }
+    }
+
+    /// Evaluates the points (xs, ys, zs) into `out`, each with the tape of
+    /// its cell.
+    pub(crate) fn eval(
+        &mut self,
+        eval: &mut BatchEvaluator<'s, f32>,
+        vars: &[f64],
+        xs: &[f32],
+        ys: &[f32],
+        zs: &[f32],
+        out: &mut [f32],
+    ) {
+        let m = xs.len().min(ys.len()).min(zs.len()).min(out.len());
+        if m == 0 {
+            return;
+        }
+        if let Some(cell) = self.group(&xs[..m], &ys[..m], &zs[..m], 0.0) {
+            let t = self.cell_tape(cell);
+            self.instrs_run += (m * self.tape_of(t).len()) as u64;
+            let tape = self.tape_of(t);
+            eval.eval_variant(tape, vars, xs, ys, zs, out);
+            return;
+        }
+        let mut g = std::mem::take(&mut self.gather);
+        for (start, end, t) in self.runs() {
+            let [gx, gy, gz, gd, ..] = &mut g;
+            self.gather_points(start..end, [xs, ys, zs], [gx, gy, gz]);
+            gd.resize(end - start, 0.0);
+            self.instrs_run += ((end - start) * self.tape_of(t).len()) as u64;
+            let tape = self.tape_of(t);
+            eval.eval_variant(tape, vars, gx, gy, gz, &mut gd[..end - start]);
+            for (j, &k) in self.keys[start..end].iter().enumerate() {
+                out[(k & 0xffff_ffff) as usize] = gd[j];
+            }
+        }
+        self.gather = g;
+    }
+
+    /// Gradients (see [`BatchEvaluator::gradients`]) at the points, each
+    /// with the tape of a cell holding its whole finite-difference stencil
+    /// (dual numbers run the full tape).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn gradients(
+        &mut self,
+        eval: &mut BatchEvaluator<'s, f32>,
+        vars: &[f64],
+        xs: &[f32],
+        ys: &[f32],
+        zs: &[f32],
+        mode: GradientMode,
+        gx: &mut [f32],
+        gy: &mut [f32],
+        gz: &mut [f32],
+    ) {
+        let h = match mode {
+            GradientMode::Central(h) | GradientMode::Forward(h) | GradientMode::Tetrahedron(h) => h,
+            GradientMode::Dual => f64::NAN,
+        };
+        let m = xs.len().min(ys.len()).min(zs.len());
+        if m == 0 {
+            return;
+        }
+        if !h.is_finite() {
+            eval.gradients(vars, xs, ys, zs, mode, gx, gy, gz);
+            return;
+        }
+        // The stencil's offsets are at most h along each axis.
+        let margin = 1.01 * h.abs() + 1e-6;
+        if let Some(cell) = self.group(&xs[..m], &ys[..m], &zs[..m], margin) {
+            let tape = self.tape_of(self.cell_tape(cell));
+            eval.gradients_variant(Some(tape), vars, xs, ys, zs, mode, gx, gy, gz);
+            return;
+        }
+        let mut g = std::mem::take(&mut self.gather);
+        for (start, end, t) in self.runs() {
+            let [px, py, pz, ox, oy, oz, _] = &mut g;
+            self.gather_points(start..end, [xs, ys, zs], [px, py, pz]);
+            for v in [&mut *ox, &mut *oy, &mut *oz] {
+                v.clear();
+                v.resize(end - start, 0.0);
+            }
+            let tape = self.tape_of(t);
+            eval.gradients_variant(Some(tape), vars, px, py, pz, mode, ox, oy, oz);
+            for (j, &k) in self.keys[start..end].iter().enumerate() {
+                let i = (k & 0xffff_ffff) as usize;
+                (gx[i], gy[i], gz[i]) = (ox[j], oy[j], oz[j]);
+            }
+        }
+        self.gather = g;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::trace::Field;
+
+    /// A scene of `n` spheres joined by a smooth union (as
+    /// bench/tracer/spheres.sh writes, smaller).
+    fn spheres(n: usize, size: (u32, u32)) -> String {
+        let mut s = format!(
+            "[camera]\nposition = [0.0, 3.0, 14.0]\ntarget = [0.0, 0.0, 0.0]\n[render]\nwidth = {}\nheight = {}\nblend = 0.15\n[[light]]\ndirection = [-0.6, 1.0, 0.8]\n",
+            size.0, size.1
+        );
+        let mut seed = 12345u64;
+        let mut rnd = || {
+            seed = seed * 16807 % 2147483647;
+            -4.0 + 8.0 * seed as f64 / 2147483647.0
+        };
+        for _ in 0..n {
+            let c = [rnd(), rnd(), rnd()];
+            s += &format!(
+                "[[object]]\nshape = \"sphere(p - vec3({:.4}, {:.4}, {:.4}), 0.3)\"\n",
+                c[0], c[1], c[2]
+            );
+        }
+        s
+    }
+
+    /// Pruned evaluations equal the full tape's bit for bit, inside the
+    /// domain and out, in batches spread over many cells, and run far fewer
+    /// instructions.
+    #[test]
+    fn pruned_field_equals_the_full_tape() {
+        let scene = isoray_scene::load_str(&spheres(60, (8, 8)), "spheres.toml", &[]).unwrap();
+        let tape = scene.shape.tape();
+        assert!(super::prunable(tape), "{} instructions", tape.len());
+        let mut pruned = Field::pruned(tape, &scene.inputs, [0.0, 0.0, 0.0], 6.0);
+        let mut full = Field::new(tape, &scene.inputs);
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f32 / (1u64 << 53) as f32
+        };
+        let mut points = 0;
+        for round in 0..60 {
+            // Some batches clustered (as a packet's rays are), some spread.
+            let (c, r) = if round % 2 == 0 {
+                ([rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0], 0.3)
+            } else {
+                ([0.0; 3], 7.0)
+            };
+            let n = 2000;
+            let p: Vec<[f32; 3]> = (0..n)
+                .map(|_| std::array::from_fn(|k| c[k] + (rnd() * 2.0 - 1.0) * r))
+                .collect();
+            let (xs, ys, zs): (Vec<f32>, Vec<f32>, Vec<f32>) = (
+                p.iter().map(|q| q[0]).collect(),
+                p.iter().map(|q| q[1]).collect(),
+                p.iter().map(|q| q[2]).collect(),
+            );
+            let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
+            pruned.eval(&xs, &ys, &zs, &mut a);
+            full.eval(&xs, &ys, &zs, &mut b);
+            for i in 0..n {
+                assert_eq!(a[i].to_bits(), b[i].to_bits(), "at {:?}", p[i]);
+            }
+            let mode = isoray_shape::GradientMode::Tetrahedron(1e-3);
+            let mut ga = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+            let mut gb = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+            {
+                let [x, y, z] = &mut ga;
+                pruned.gradients(&xs, &ys, &zs, mode, x, y, z);
+            }
+            {
+                let [x, y, z] = &mut gb;
+                full.gradients(&xs, &ys, &zs, mode, x, y, z);
+            }
+            for k in 0..3 {
+                for i in 0..n {
+                    assert_eq!(ga[k][i].to_bits(), gb[k][i].to_bits(), "gradient at {:?}", p[i]);
+                }
+            }
+            points += n;
+        }
+        let run = pruned.instructions_run().unwrap();
+        let whole = (points * tape.len()) as u64;
+        assert!(run * 10 < whole * 7, "{run} instructions run, {whole} unpruned");
+    }
+
+    /// A render with `render.prune` on is byte for byte the render with it off.
+    #[test]
+    fn pruning_leaves_the_image_unchanged() {
+        let text = spheres(60, (48, 32));
+        let on = isoray_scene::load_str(&text, "spheres.toml", &[]).unwrap();
+        let off = isoray_scene::load_str(&text, "spheres.toml", &["render.prune=false".into()]).unwrap();
+        let opts = crate::RenderOptions {
+            aovs: true,
+            ..Default::default()
+        };
+        let (a, _) = crate::render(&on, &opts);
+        let (b, _) = crate::render(&off, &opts);
+        assert_eq!(a, b);
+        let hit = a.depth.as_ref().unwrap().iter().filter(|d| d.is_finite()).count();
+        assert!(hit > 100, "only {hit} pixels hit");
+    }
+}
