@@ -26,6 +26,8 @@ cd "$ROOT"
 cargo build --release -q -p isoray >&2
 CARGO_TARGET_DIR=bench/out/fidget-target cargo build --release -q --manifest-path bench/voxels/fidget-render3d/Cargo.toml >&2
 FIDGET=bench/out/fidget-target/release/fidget-render3d
+# The depth comparison reads PNGs with Pillow (PyPI).
+python3 -c 'import PIL' 2>/dev/null || python3 -m pip install -q --user pillow >&2 || python3 -m pip install -q --user --break-system-packages pillow >&2 || true
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/isoray-voxels.XXXXXX")
 trap 'rm -rf "$TMP"' EXIT
 

@@ -48,7 +48,15 @@ struct Cell {
     /// Per child not made yet, the points this cell evaluated for want of
     /// it (see [`PATIENCE`]).
     visits: [u32; 8],
+    /// The cell it divides ([`NONE`] for the root).
+    parent: u32,
 }
+
+/// Groups of fewer points than this go to the parent cell when its tape
+/// is at most twice as long: the batch evaluator's cost per instruction
+/// hardly depends on the number of points below its block size, so one
+/// group of 8 points beats four of 2.
+pub const MIN_GROUP: usize = 8;
 
 /// A child is made once its parent has evaluated this many points that
 /// fall in it: making one (interval evaluation and simplification of the
@@ -164,6 +172,7 @@ impl<'s> Pruner<'s> {
             tape,
             kids: (!leaf).then_some([NONE; 8]),
             visits: [0; 8],
+            parent: NONE,
         }
     }
 
@@ -208,7 +217,8 @@ impl<'s> Pruner<'s> {
                     return cell;
                 }
                 let parent = self.cells[cell as usize].tape;
-                let made = self.make_cell(parent, cc, h2, depth);
+                let mut made = self.make_cell(parent, cc, h2, depth);
+                made.parent = cell;
                 kid = self.cells.len() as u32;
                 self.cells.push(made);
                 if let Some(k) = &mut self.cells[cell as usize].kids {
@@ -238,6 +248,34 @@ impl<'s> Pruner<'s> {
             return Some(first);
         }
         self.keys.sort_unstable();
+        // Small groups move up to their parent cell (a few levels at most).
+        for _ in 0..4 {
+            let mut moved = false;
+            let m = self.keys.len();
+            let mut start = 0;
+            while start < m {
+                let cell = (self.keys[start] >> 32) as u32;
+                let mut end = start + 1;
+                while end < m && self.keys[end] >> 32 == cell as u64 {
+                    end += 1;
+                }
+                if end - start < MIN_GROUP && cell != NONE {
+                    let parent = self.cells[cell as usize].parent;
+                    let len = |c: u32| self.tape_of(self.cell_tape(c)).len();
+                    if parent != NONE && len(parent) <= 2 * len(cell) {
+                        for k in &mut self.keys[start..end] {
+                            *k = ((parent as u64) << 32) | (*k & 0xffff_ffff);
+                        }
+                        moved = true;
+                    }
+                }
+                start = end;
+            }
+            if !moved {
+                break;
+            }
+            self.keys.sort_unstable();
+        }
         None
     }
 
