@@ -49,7 +49,7 @@
 use isoray_shape::eval::{BatchEvaluator, Dual, GradientMode, PointEvaluator, LANES};
 use isoray_shape::interval::{Choice, Interval, IntervalEvaluator};
 use isoray_shape::ir::Tape;
-use isoray_shape::simplify::simplify;
+use isoray_shape::simplify::Simplifier;
 use rayon::prelude::*;
 
 /// The image side of a tile rendered by one task.
@@ -250,6 +250,10 @@ struct TileRender<'a> {
     has_normal: Vec<bool>,
     /// Bounds the cubes (the full tape or a simplified one).
     intervals: IntervalEvaluator<'a>,
+    /// The leaves' normals (their short tapes, by dual numbers).
+    dual: PointEvaluator<'a, Dual>,
+    /// Simplifies the tape per ambiguous cube (its buffers reused).
+    simplifier: Simplifier,
     /// Scratch: the min/max choices of the last interval evaluation.
     choices: Vec<Choice>,
     xs: Vec<f64>,
@@ -273,6 +277,8 @@ impl<'a> TileRender<'a> {
             normals: vec![[0.0; 3]; (TILE * TILE) as usize],
             has_normal: vec![false; (TILE * TILE) as usize],
             intervals: IntervalEvaluator::new(tape, vars),
+            dual: PointEvaluator::new(tape),
+            simplifier: Simplifier::default(),
             choices: Vec::new(),
             xs: vec![0.0; LANES],
             ys: vec![0.0; LANES],
@@ -303,7 +309,7 @@ impl<'a> TileRender<'a> {
         }
         // The branches that cannot win in this cube are dropped for all
         // that is evaluated inside it.
-        let simplified = simplify(tape, &self.choices);
+        let simplified = self.simplifier.simplify(tape, &self.choices);
         let tape = simplified.as_ref().unwrap_or(tape);
         let s = size / 2;
         let children = [s, 0].into_iter().flat_map(|dz| {
@@ -421,10 +427,11 @@ impl<'a> TileRender<'a> {
         for (c, &(_, b)) in set.iter().enumerate() {
             (px[c], py[c], pz[c]) = (self.xs[b], self.ys[b], self.zs[b]);
         }
-        let mut dual = PointEvaluator::<Dual>::new(tape);
         for (c, &(k, _)) in set.iter().enumerate() {
-            let g = dual
-                .eval(
+            let g = self
+                .dual
+                .eval_variant(
+                    tape,
                     self.vars,
                     Dual::with(px[c], [1.0, 0.0, 0.0]),
                     Dual::with(py[c], [0.0, 1.0, 0.0]),

@@ -97,6 +97,7 @@ impl Num for Dual {
     fn value(self) -> f64 {
         self.v
     }
+    #[inline]
     fn unary(op: UnOp, a: Self) -> Self {
         let v = apply_unary(op, a.v);
         let k = match op {
@@ -128,6 +129,7 @@ impl Num for Dual {
         };
         Dual::with(v, a.scale(k))
     }
+    #[inline]
     fn binary(op: BinOp, a: Self, b: Self) -> Self {
         let v = apply_binary(op, a.v, b.v);
         let lin = |ka: f64, kb: f64| {
@@ -201,6 +203,25 @@ impl<'t, T: Num> PointEvaluator<'t, T> {
 
     /// The value at (x, y, z) with the inputs `vars`.
     pub fn eval(&mut self, vars: &[f64], x: T, y: T, z: T) -> T {
+        let tape = self.tape;
+        self.run(tape, vars, x, y, z)
+    }
+
+    /// The value of `variant`, a rewrite of this evaluator's tape (see
+    /// [`BatchEvaluator::eval_variant`]), at (x, y, z): no allocation per
+    /// variant.
+    ///
+    /// # Panics
+    /// When `variant` has another number of slots or other constants.
+    pub fn eval_variant(&mut self, variant: &Tape, vars: &[f64], x: T, y: T, z: T) -> T {
+        assert!(
+            variant.same_frame(self.tape),
+            "a variant must keep its tape's slots and constants"
+        );
+        self.run(variant, vars, x, y, z)
+    }
+
+    fn run(&mut self, tape: &Tape, vars: &[f64], x: T, y: T, z: T) -> T {
         if self.inputs.changed(self.tape, vars) {
             let mut scratch = std::mem::take(&mut self.inputs.scratch);
             for (slot, v) in self.tape.prologue().run(vars, &mut scratch) {
@@ -212,7 +233,7 @@ impl<'t, T: Num> PointEvaluator<'t, T> {
         s[0] = x;
         s[1] = y;
         s[2] = z;
-        let instrs = self.tape.instrs();
+        let instrs = tape.instrs();
         let mut k = 0;
         while k < instrs.len() {
             let ins = &instrs[k];
@@ -234,7 +255,7 @@ impl<'t, T: Num> PointEvaluator<'t, T> {
                 }
             }
         }
-        s[self.tape.output()]
+        s[tape.output()]
     }
 }
 
