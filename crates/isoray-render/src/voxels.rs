@@ -46,7 +46,7 @@
 //! assert_eq!(img.depth_at(0, 0), 0);
 //! ```
 
-use isoray_shape::eval::{BatchEvaluator, Dual, GradientMode, PointEvaluator, LANES};
+use isoray_shape::eval::{BatchEvaluator, DualBatch, LANES};
 use isoray_shape::interval::{Choice, Interval, IntervalEvaluator};
 use isoray_shape::ir::Tape;
 use isoray_shape::simplify::Simplifier;
@@ -250,8 +250,8 @@ struct TileRender<'a> {
     has_normal: Vec<bool>,
     /// Bounds the cubes (the full tape or a simplified one).
     intervals: IntervalEvaluator<'a>,
-    /// The leaves' normals (their short tapes, by dual numbers).
-    dual: PointEvaluator<'a, Dual>,
+    /// Normals by dual numbers (the leaves' short tapes, or the full tape).
+    dual: DualBatch<'a>,
     /// Simplifies the tape per ambiguous cube (its buffers reused).
     simplifier: Simplifier,
     /// Scratch: the min/max choices of the last interval evaluation.
@@ -277,7 +277,7 @@ impl<'a> TileRender<'a> {
             normals: vec![[0.0; 3]; (TILE * TILE) as usize],
             has_normal: vec![false; (TILE * TILE) as usize],
             intervals: IntervalEvaluator::new(tape, vars),
-            dual: PointEvaluator::new(tape),
+            dual: DualBatch::new(tape),
             simplifier: Simplifier::default(),
             choices: Vec::new(),
             xs: vec![0.0; LANES],
@@ -427,18 +427,10 @@ impl<'a> TileRender<'a> {
         for (c, &(_, b)) in set.iter().enumerate() {
             (px[c], py[c], pz[c]) = (self.xs[b], self.ys[b], self.zs[b]);
         }
+        let mut g = vec![[0.0; 3]; n];
+        self.dual.gradients(tape, self.vars, &px, &py, &pz, &mut g);
         for (c, &(k, _)) in set.iter().enumerate() {
-            let g = self
-                .dual
-                .eval_variant(
-                    tape,
-                    self.vars,
-                    Dual::with(px[c], [1.0, 0.0, 0.0]),
-                    Dual::with(py[c], [0.0, 1.0, 0.0]),
-                    Dual::with(pz[c], [0.0, 0.0, 1.0]),
-                )
-                .d;
-            self.normals[k] = world_normal(&self.view.world_to_model, g);
+            self.normals[k] = world_normal(&self.view.world_to_model, g[c]);
             self.has_normal[k] = true;
         }
     }
@@ -464,19 +456,12 @@ impl<'a> TileRender<'a> {
                 self.zs[c] = p[2];
             }
             let n = chunk.len();
-            let (mut gx, mut gy, mut gz) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-            self.eval.gradients(
-                self.vars,
-                &self.xs[..n],
-                &self.ys[..n],
-                &self.zs[..n],
-                GradientMode::Dual,
-                &mut gx,
-                &mut gy,
-                &mut gz,
-            );
+            let mut g = vec![[0.0; 3]; n];
+            let tape = self.tape;
+            self.dual
+                .gradients(tape, self.vars, &self.xs[..n], &self.ys[..n], &self.zs[..n], &mut g);
             for (c, &k) in chunk.iter().enumerate() {
-                out[k] = world_normal(&self.view.world_to_model, [gx[c], gy[c], gz[c]]);
+                out[k] = world_normal(&self.view.world_to_model, g[c]);
             }
         }
         out

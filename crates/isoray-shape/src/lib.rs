@@ -33,7 +33,7 @@ pub mod vm;
 pub mod wgsl;
 
 pub use diag::{Diagnostic, SourceId, Span};
-pub use eval::{gradient, BatchEvaluator, Dual, GradientMode, PointEvaluator, LANES};
+pub use eval::{gradient, BatchEvaluator, Dual, DualBatch, GradientMode, PointEvaluator, LANES};
 pub use ir::{Builder, Node, Tape, TIME};
 pub use lower::{Analyses, Compiled, Library, Surface, SurfaceMode, GRADIENT_GUARD};
 pub use types::{Type, Value};
