@@ -24,7 +24,8 @@
 //! ([`isoray_shape::simplify`]): the min/max branches that cannot win in it
 //! are dropped for everything evaluated inside; the leaves run their short
 //! tapes in the tile's one evaluator (a simplified tape keeps its tape's
-//! slots), and compute their normals with them too.
+//! slots), in f32 as fidget does, and compute their normals with them too,
+//! by dual numbers in f64, all the leaf's filled columns in one batch.
 //!
 //! ```
 //! use isoray_render::voxels::{depth_normals, VoxelView};
@@ -241,9 +242,8 @@ struct TileRender<'a> {
     h: u32,
     /// TILE × TILE depths.
     depths: Vec<u32>,
-    /// Runs the leaves' simplified tapes (`eval_variant`) and the normals
-    /// of pixels filled by a solid cube (the full tape).
-    eval: BatchEvaluator<'a, f64>,
+    /// Runs the leaves' simplified tapes (`eval_variant`), in f32.
+    eval: BatchEvaluator<'a, f32>,
     /// TILE × TILE normals, and whether each was computed (in a leaf, with
     /// its short tape).
     normals: Vec<[f32; 3]>,
@@ -259,7 +259,12 @@ struct TileRender<'a> {
     xs: Vec<f64>,
     ys: Vec<f64>,
     zs: Vec<f64>,
-    out: Vec<f64>,
+    /// The leaf's points in f32 (evaluated in f32, as fidget does) and
+    /// their values.
+    xf: Vec<f32>,
+    yf: Vec<f32>,
+    zf: Vec<f32>,
+    out: Vec<f32>,
 }
 
 impl<'a> TileRender<'a> {
@@ -283,6 +288,9 @@ impl<'a> TileRender<'a> {
             xs: vec![0.0; LANES],
             ys: vec![0.0; LANES],
             zs: vec![0.0; LANES],
+            xf: vec![0.0; LANES],
+            yf: vec![0.0; LANES],
+            zf: vec![0.0; LANES],
             out: vec![0.0; LANES],
         }
     }
@@ -383,6 +391,7 @@ impl<'a> TileRender<'a> {
                     self.xs[k] = p[0];
                     self.ys[k] = p[1];
                     self.zs[k] = p[2];
+                    (self.xf[k], self.yf[k], self.zf[k]) = (p[0] as f32, p[1] as f32, p[2] as f32);
                     k += 1;
                 }
             }
@@ -391,9 +400,9 @@ impl<'a> TileRender<'a> {
         self.eval.eval_variant(
             tape,
             self.vars,
-            &self.xs[..n],
-            &self.ys[..n],
-            &self.zs[..n],
+            &self.xf[..n],
+            &self.yf[..n],
+            &self.zf[..n],
             &mut self.out[..n],
         );
         // Columns whose depth this leaf sets, and their voxels (the batch index).
@@ -506,14 +515,14 @@ mod tests {
             VoxelView::from_view(33, 65, 90, 1.3, 20.0, -30.0, 45.0),
         ] {
             let img = depth_normals(&tape, &[], &view);
-            let mut e = isoray_shape::PointEvaluator::<f64>::new(&tape);
+            let mut e = isoray_shape::PointEvaluator::<f32>::new(&tape);
             for y in 0..view.height {
                 for x in 0..view.width {
                     let want = (0..view.depth)
                         .rev()
                         .find(|&z| {
                             let p = view.screen_to_model([x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5]);
-                            e.eval(&[], p[0], p[1], p[2]) < 0.0
+                            e.eval(&[], p[0] as f32, p[1] as f32, p[2] as f32) < 0.0
                         })
                         .map_or(0, |z| z + 1);
                     assert_eq!(img.depth_at(x, y), want, "pixel ({x}, {y}) of {view:?}");
