@@ -251,25 +251,18 @@ impl<'s> Pruner<'s> {
         // Small groups move up to their parent cell (a few levels at most).
         for _ in 0..4 {
             let mut moved = false;
-            let m = self.keys.len();
-            let mut start = 0;
-            while start < m {
-                let cell = (self.keys[start] >> 32) as u32;
-                let mut end = start + 1;
-                while end < m && self.keys[end] >> 32 == cell as u64 {
-                    end += 1;
+            for (start, end, cell) in self.runs() {
+                if end - start >= MIN_GROUP || cell == NONE {
+                    continue;
                 }
-                if end - start < MIN_GROUP && cell != NONE {
-                    let parent = self.cells[cell as usize].parent;
-                    let len = |c: u32| self.tape_of(self.cell_tape(c)).len();
-                    if parent != NONE && len(parent) <= 2 * len(cell) {
-                        for k in &mut self.keys[start..end] {
-                            *k = ((parent as u64) << 32) | (*k & 0xffff_ffff);
-                        }
-                        moved = true;
+                let parent = self.cells[cell as usize].parent;
+                let len = |c: u32| self.tape_of(self.cell_tape(c)).len();
+                if parent != NONE && len(parent) <= 2 * len(cell) {
+                    for k in &mut self.keys[start..end] {
+                        *k = ((parent as u64) << 32) | (*k & 0xffff_ffff);
                     }
+                    moved = true;
                 }
-                start = end;
             }
             if !moved {
                 break;
@@ -279,7 +272,7 @@ impl<'s> Pruner<'s> {
         None
     }
 
-    /// The runs of `self.keys` (after [`Self::group`]): (start, end, tape).
+    /// The runs of `self.keys` (after [`Self::group`]): (start, end, cell).
     fn runs(&self) -> Vec<(usize, usize, u32)> {
         let mut runs = Vec::new();
         let m = self.keys.len();
@@ -290,7 +283,7 @@ impl<'s> Pruner<'s> {
             while end < m && self.keys[end] >> 32 == cell {
                 end += 1;
             }
-            runs.push((start, end, self.cell_tape(cell as u32)));
+            runs.push((start, end, cell as u32));
             start = end;
         }
         runs
@@ -328,7 +321,8 @@ impl<'s> Pruner<'s> {
             return;
         }
         let mut g = std::mem::take(&mut self.gather);
-        for (start, end, t) in self.runs() {
+        for (start, end, cell) in self.runs() {
+            let t = self.cell_tape(cell);
             let [gx, gy, gz, gd, ..] = &mut g;
             self.gather_points(start..end, [xs, ys, zs], [gx, gy, gz]);
             gd.resize(end - start, 0.0);
@@ -358,15 +352,12 @@ impl<'s> Pruner<'s> {
         gy: &mut [f32],
         gz: &mut [f32],
     ) {
-        let h = match mode {
-            GradientMode::Central(h) | GradientMode::Forward(h) | GradientMode::Tetrahedron(h) => h,
-            GradientMode::Dual => f64::NAN,
-        };
         let m = xs.len().min(ys.len()).min(zs.len());
         if m == 0 {
             return;
         }
-        if !h.is_finite() {
+        let h = mode.step();
+        if mode == GradientMode::Dual || !h.is_finite() {
             eval.gradients(vars, xs, ys, zs, mode, gx, gy, gz);
             return;
         }
@@ -378,7 +369,8 @@ impl<'s> Pruner<'s> {
             return;
         }
         let mut g = std::mem::take(&mut self.gather);
-        for (start, end, t) in self.runs() {
+        for (start, end, cell) in self.runs() {
+            let t = self.cell_tape(cell);
             let [px, py, pz, ox, oy, oz, _] = &mut g;
             self.gather_points(start..end, [xs, ys, zs], [px, py, pz]);
             for v in [&mut *ox, &mut *oy, &mut *oz] {

@@ -303,10 +303,14 @@ pub fn stencil(mode: GradientMode) -> Vec<([f64; 3], [f64; 3])> {
     }
 }
 
-fn step_of(mode: GradientMode) -> f64 {
-    match mode {
-        GradientMode::Dual => 0.0,
-        GradientMode::Central(h) | GradientMode::Forward(h) | GradientMode::Tetrahedron(h) => h,
+impl GradientMode {
+    /// The finite-difference step (world units; every stencil offset is at
+    /// most this along each axis); 0 for dual numbers.
+    pub fn step(self) -> f64 {
+        match self {
+            GradientMode::Dual => 0.0,
+            GradientMode::Central(h) | GradientMode::Forward(h) | GradientMode::Tetrahedron(h) => h,
+        }
     }
 }
 
@@ -319,7 +323,7 @@ pub fn gradient(tape: &Tape, vars: &[f64], p: [f64; 3], mode: GradientMode) -> [
         let z = Dual::with(p[2], [0.0, 0.0, 1.0]);
         return e.eval(vars, x, y, z).d;
     }
-    let h = step_of(mode);
+    let h = mode.step();
     let mut e = PointEvaluator::<f64>::new(tape);
     let mut g = [0.0; 3];
     for (o, w) in stencil(mode) {
@@ -361,13 +365,9 @@ pub struct BatchEvaluator<'t, T: BatchNum> {
 impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
     /// An evaluator for `tape`; allocates its working memory once.
     pub fn new(tape: &'t Tape) -> Self {
-        let mut slots = vec![T::default(); tape.slots() * LANES];
-        for &(s, v) in tape.constants() {
-            slots[s as usize * LANES..(s as usize + 1) * LANES].fill(T::from_f64(v));
-        }
         BatchEvaluator {
             tape,
-            slots,
+            slots: block_slots(tape),
             inputs: InputCache::default(),
             scratch: Default::default(),
             dual: None,
@@ -381,13 +381,7 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
 
     /// Runs the prologue when the inputs changed since the last call.
     fn bind(&mut self, vars: &[f64]) {
-        if self.inputs.changed(self.tape, vars) {
-            let mut scratch = std::mem::take(&mut self.inputs.scratch);
-            for (slot, v) in self.tape.prologue().run(vars, &mut scratch) {
-                self.slots[slot * LANES..(slot + 1) * LANES].fill(T::from_f64(v));
-            }
-            self.inputs.scratch = scratch;
-        }
+        bind_blocks(self.tape, &mut self.inputs, &mut self.slots, vars);
     }
 
     /// Evaluates at the points (xs[i], ys[i], zs[i]) with the inputs `vars`
@@ -506,7 +500,7 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
             }
             return;
         }
-        let h = step_of(mode);
+        let h = mode.step();
         let inv_h = T::from_f64(1.0 / h);
         gx[..n].fill(T::default());
         gy[..n].fill(T::default());
@@ -536,6 +530,27 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
             }
         }
         self.scratch = scratch;
+    }
+}
+
+/// Block storage for a tape: [`LANES`] values per slot, the constants'
+/// blocks filled.
+fn block_slots<T: Num>(tape: &Tape) -> Vec<T> {
+    let mut slots = vec![T::from_f64(0.0); tape.slots() * LANES];
+    for &(s, v) in tape.constants() {
+        slots[s as usize * LANES..(s as usize + 1) * LANES].fill(T::from_f64(v));
+    }
+    slots
+}
+
+/// Fills the blocks of the prologue's values when the inputs changed.
+fn bind_blocks<T: Num>(tape: &Tape, inputs: &mut InputCache, slots: &mut [T], vars: &[f64]) {
+    if inputs.changed(tape, vars) {
+        let mut scratch = std::mem::take(&mut inputs.scratch);
+        for (slot, v) in tape.prologue().run(vars, &mut scratch) {
+            slots[slot * LANES..(slot + 1) * LANES].fill(T::from_f64(v));
+        }
+        inputs.scratch = scratch;
     }
 }
 
@@ -601,13 +616,9 @@ pub struct DualBatch<'t> {
 impl<'t> DualBatch<'t> {
     /// An evaluator for `tape` (and its rewrites).
     pub fn new(tape: &'t Tape) -> Self {
-        let mut slots = vec![Dual::default(); tape.slots() * LANES];
-        for &(s, v) in tape.constants() {
-            slots[s as usize * LANES..(s as usize + 1) * LANES].fill(Dual::from_f64(v));
-        }
         DualBatch {
             tape,
-            slots,
+            slots: block_slots(tape),
             inputs: InputCache::default(),
         }
     }
@@ -631,13 +642,7 @@ impl<'t> DualBatch<'t> {
             variant.same_frame(self.tape),
             "a variant must keep its tape's slots and constants"
         );
-        if self.inputs.changed(self.tape, vars) {
-            let mut scratch = std::mem::take(&mut self.inputs.scratch);
-            for (slot, v) in self.tape.prologue().run(vars, &mut scratch) {
-                self.slots[slot * LANES..(slot + 1) * LANES].fill(Dual::from_f64(v));
-            }
-            self.inputs.scratch = scratch;
-        }
+        bind_blocks(self.tape, &mut self.inputs, &mut self.slots, vars);
         let n = xs.len().min(ys.len()).min(zs.len()).min(out.len());
         let o = variant.output() * LANES;
         let mut i = 0;
