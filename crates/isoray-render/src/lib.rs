@@ -31,8 +31,10 @@ pub mod bounds;
 pub mod camera;
 mod dents;
 pub mod meshes;
+mod objects;
 pub mod output;
 mod prune;
+pub mod reach;
 pub mod sequence;
 pub mod tiles;
 pub mod trace;
@@ -44,13 +46,13 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::Vec3;
 use isoray_job::{CancelToken, Cancelled, Progress};
 use isoray_scene::{NormalMethod, Scene, ShadowMode, View};
-use isoray_shade::material::{blend_weight, checker, smooth_min};
+use isoray_shade::material::checker;
 use isoray_shade::{lights, phong, to_vec3, MaterialSample};
 use isoray_shape::GradientMode;
 use rayon::prelude::*;
 
 use camera::RayCamera;
-use trace::{shadow_march, sphere_trace, sphere_trace_capped, Field, Hit, Rays, Scratch};
+use trace::{shadow_march, sphere_trace_capped, Field, Hit, Rays, Scratch};
 
 /// Tile edge in pixels.
 pub const TILE: u32 = 16;
@@ -504,6 +506,11 @@ struct Ctx<'s> {
     /// shadow rays' and ambient-occlusion samples'): the domain of the
     /// pruned fields; None with `render.prune` off.
     domain: Option<([f64; 3], f64)>,
+    /// Where the scene's surface and that of the objects marched beside
+    /// closed-form ones can be (with `render.prune` on): rays stop
+    /// marching once they leave it.
+    scene_reach: Option<reach::Reach>,
+    rest_reach: Option<reach::Reach>,
 }
 
 impl<'s> Ctx<'s> {
@@ -529,10 +536,24 @@ impl<'s> Ctx<'s> {
         let r = &scene.render;
         let reach = r.max_distance + r.shadow_max_distance + r.ao_step * r.ao_samples as f64 + 1.0;
         let domain = r.prune.then(|| (cam.origin().to_array(), reach));
+        // A hit is a distance below hit_epsilon (times t, at most max_distance).
+        let above = r.hit_epsilon
+            * if r.relative_epsilon {
+                r.max_distance.max(1.0)
+            } else {
+                1.0
+            };
+        let rays = r.width as u64 * r.height as u64 * (r.aa as u64).pow(2);
+        let reach_of =
+            |tape: &isoray_shape::Tape| domain.map(|(c, h)| reach::Reach::new(tape, &scene.inputs, c, h, above, rays));
+        let scene_reach = reach_of(scene.shape.tape());
+        let rest_reach = scene.derived().rest.as_ref().and_then(|r| reach_of(r.tape()));
         Ctx {
             scene,
             cam,
             domain,
+            scene_reach,
+            rest_reach,
             surfaces,
             material_of,
             material_surfaces,
@@ -556,7 +577,9 @@ struct Worker<'s> {
     counts: RayCounts,
     /// The current tile's top-left pixel (seeds the light samples).
     tile_origin: (u32, u32),
-    object_evals: Vec<Field<'s>>,
+    /// Every object's field, when there are several (materials, nearest
+    /// objects).
+    objects: Option<objects::Objects<'s>>,
     scratch: Scratch,
     rays: Rays,
     hits: Vec<Hit>,
@@ -582,15 +605,10 @@ struct HitSet {
 impl<'s> Worker<'s> {
     fn new(ctx: &Ctx<'s>) -> Self {
         let vars: &'s [f64] = &ctx.scene.inputs;
-        let object_evals = if ctx.scene.objects.len() > 1 {
-            ctx.scene
-                .objects
-                .iter()
-                .map(|o| Field::new(o.shape.tape(), vars))
-                .collect()
-        } else {
-            Vec::new()
-        };
+        let objects = (ctx.scene.objects.len() > 1).then(|| {
+            let tapes = ctx.scene.objects.iter().map(|o| o.shape.tape()).collect();
+            objects::Objects::new(tapes, vars)
+        });
         let field = |tape: &'s isoray_shape::Tape| match ctx.domain {
             Some((center, half)) => Field::pruned(tape, vars, center, half),
             None => Field::new(tape, vars),
@@ -607,7 +625,7 @@ impl<'s> Worker<'s> {
                 clear: field(sh.transparent.tape()),
                 clear_surfaces: field(sh.transparent_surfaces.tape()),
             }),
-            object_evals,
+            objects,
             scratch: Scratch::default(),
             rays: Rays::default(),
             hits: Vec::new(),
@@ -620,15 +638,15 @@ impl<'s> Worker<'s> {
         let s = &ctx.scene.render;
         // Meshes first: the nearest triangle of each ray caps its march.
         let mesh_hits = meshes::closest_hits(&ctx.scene.meshes, &self.rays);
-        let rest = if inside { None } else { self.rest_eval.as_mut() };
-        let mut evals = if rest.is_some() || !ctx.scene.meshes.is_empty() {
+        let rest = !inside && self.rest_eval.is_some();
+        let capped = rest || !ctx.scene.meshes.is_empty();
+        self.caps.clear();
+        if capped {
             // Planes and spheres in closed form, and meshes; the other
             // objects marched up to the nearest of them.
-            self.caps.clear();
             for i in 0..self.rays.len() {
-                let o = [self.rays.ox[i], self.rays.oy[i], self.rays.oz[i]];
-                let d = [self.rays.dx[i], self.rays.dy[i], self.rays.dz[i]];
-                let analytic = if rest.is_some() {
+                let (o, d) = (self.rays.origin(i), self.rays.direction(i));
+                let analytic = if rest {
                     ctx.scene
                         .derived()
                         .analytic
@@ -642,20 +660,34 @@ impl<'s> Worker<'s> {
                 let mesh = mesh_hits.get(i).and_then(|h| h.map(|h| h.t)).unwrap_or(f32::INFINITY);
                 self.caps.push(analytic.min(mesh));
             }
-            let ev = match rest {
-                Some(rest) => rest,
-                None if inside => &mut self.surf_eval,
-                None => &mut self.scene_eval,
-            };
-            sphere_trace_capped(ev, &self.rays, s, &mut self.scratch, &mut self.hits, Some(&self.caps))
-        } else {
-            let ev = if inside {
-                &mut self.surf_eval
-            } else {
-                &mut self.scene_eval
-            };
-            sphere_trace(ev, &self.rays, s, &mut self.scratch, &mut self.hits)
+        }
+        // Where the marched field's surface ends along each ray.
+        let reach = match (inside, rest) {
+            (true, _) => None,
+            (false, true) => ctx.rest_reach.as_ref(),
+            (false, false) => ctx.scene_reach.as_ref(),
         };
+        let tmax = s.max_distance as f32;
+        let far: Option<Vec<f32>> = reach.map(|r| {
+            (0..self.rays.len())
+                .map(|i| r.far(self.rays.origin(i), self.rays.direction(i), tmax))
+                .collect()
+        });
+        let ev = match (inside, self.rest_eval.as_mut()) {
+            (true, _) => &mut self.surf_eval,
+            (false, Some(rest)) => rest,
+            (false, None) => &mut self.scene_eval,
+        };
+        let caps = capped.then_some(&self.caps[..]);
+        let mut evals = sphere_trace_capped(
+            ev,
+            &self.rays,
+            s,
+            &mut self.scratch,
+            &mut self.hits,
+            caps,
+            far.as_deref(),
+        );
         // A march that stopped at a mesh's triangle is a hit on the mesh,
         // exactly where the triangle is.
         let eps = s.hit_epsilon as f32;
@@ -1074,45 +1106,17 @@ impl<'s> Worker<'s> {
         if m == 0 {
             return (Vec::new(), Vec::new());
         }
-        if self.object_evals.is_empty() {
-            let mut obj = vec![0; m];
-            let mut out = vec![ctx.surfaces[0]; m];
-            Self::mesh_materials(ctx, hs, &mut obj, &mut out);
-            self.apply_checkers(ctx, hs, &obj, &mut out);
-            return (out, obj);
-        }
-        let k = if unsigned { 0.0 } else { ctx.scene.render.blend as f32 };
-        let km = k * ctx.scene.render.material_blend as f32;
-        let key = |d: f32| if unsigned { d.abs() } else { d };
-        let mut acc_d = vec![0.0f32; m];
-        let mut best = vec![0.0f32; m];
-        let mut obj = vec![0usize; m];
-        let mut d = vec![0.0f32; m];
+        let mut obj = vec![0; m];
         let mut out = vec![ctx.surfaces[0]; m];
-        for (j, ev) in self.object_evals.iter_mut().enumerate() {
-            let target = if j == 0 { &mut acc_d } else { &mut d };
-            ev.eval(&hs.px, &hs.py, &hs.pz, target);
-            *evals += m as u64;
-            if j == 0 {
-                for q in 0..m {
-                    best[q] = key(acc_d[q]);
-                }
-                continue;
-            }
-            for q in 0..m {
-                let (a, b) = (acc_d[q], d[q]);
-                if key(b) < best[q] {
-                    best[q] = key(b);
-                    obj[q] = j;
-                }
-                if k > 0.0 {
-                    out[q] = out[q].mix(&ctx.surfaces[j], blend_weight(a, b, km));
-                    acc_d[q] = smooth_min(a, b, k);
-                } else if obj[q] == j {
-                    out[q] = ctx.surfaces[j];
-                    acc_d[q] = b;
-                }
-            }
+        if let Some(objects) = &mut self.objects {
+            let r = &ctx.scene.render;
+            let k = if unsigned { 0.0 } else { r.blend as f32 };
+            let fold = objects::Fold {
+                k,
+                km: k * r.material_blend as f32,
+                unsigned,
+            };
+            *evals += objects.fold(&ctx.surfaces, fold, &hs.px, &hs.py, &hs.pz, &mut out, &mut obj);
         }
         Self::mesh_materials(ctx, hs, &mut obj, &mut out);
         self.apply_checkers(ctx, hs, &obj, &mut out);

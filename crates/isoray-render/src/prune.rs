@@ -66,6 +66,13 @@ pub const MIN_GROUP: usize = 8;
 /// than 64; 256 and 1000 were within the machine's noise of it.)
 pub const PATIENCE: u32 = 64;
 
+/// The cube of half-size `h` around `c` as intervals, padded for the
+/// rounding of f32 points near its faces.
+pub(crate) fn padded_cell(c: [f64; 3], h: f64) -> [Interval; 3] {
+    let pad = 1e-5 * h + 1e-6 * c.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    std::array::from_fn(|k| Interval::new(c[k] - h - pad, c[k] + h + pad))
+}
+
 /// The lazily built octree of one field (see the module docs).
 #[derive(Debug)]
 pub(crate) struct Pruner<'s> {
@@ -151,9 +158,7 @@ impl<'s> Pruner<'s> {
 
     /// A cell of the given box and depth, its tape simplified from `parent`.
     fn make_cell(&mut self, parent: u32, c: [f64; 3], h: f64, depth: u8) -> Cell {
-        // Padded for the rounding of f32 points near the cell's faces.
-        let pad = 1e-5 * h + 1e-6 * c.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let bx: [Interval; 3] = std::array::from_fn(|k| Interval::new(c[k] - h - pad, c[k] + h + pad));
+        let bx = padded_cell(c, h);
         let parent_tape = if parent == FULL {
             self.tape
         } else {

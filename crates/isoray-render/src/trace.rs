@@ -153,6 +153,14 @@ impl Rays {
             v.clear();
         }
     }
+    /// The origin of ray `i`.
+    pub fn origin(&self, i: usize) -> [f32; 3] {
+        [self.ox[i], self.oy[i], self.oz[i]]
+    }
+    /// The direction of ray `i`.
+    pub fn direction(&self, i: usize) -> [f32; 3] {
+        [self.dx[i], self.dy[i], self.dz[i]]
+    }
     /// Adds a ray.
     pub fn push(&mut self, o: [f32; 3], d: [f32; 3]) {
         self.ox.push(o[0]);
@@ -181,12 +189,14 @@ pub fn sphere_trace(
     scratch: &mut Scratch,
     hits: &mut Vec<Hit>,
 ) -> u64 {
-    sphere_trace_capped(eval, rays, s, scratch, hits, None)
+    sphere_trace_capped(eval, rays, s, scratch, hits, None, None)
 }
 
 /// Sphere-traces every ray of the packet, ray i stopping at `caps[i]` (a
 /// surface found in closed form there: the ray hits it unless the march
-/// finds one before). Returns the number of distance evaluations.
+/// finds one before), and beyond `far[i]` marching no more (no surface of
+/// the field lies beyond: see [`crate::reach`]), a miss unless a cap
+/// lies ahead. Returns the number of distance evaluations.
 pub fn sphere_trace_capped(
     eval: &mut Field,
     rays: &Rays,
@@ -194,6 +204,7 @@ pub fn sphere_trace_capped(
     scratch: &mut Scratch,
     hits: &mut Vec<Hit>,
     caps: Option<&[f32]>,
+    far: Option<&[f32]>,
 ) -> u64 {
     let n = rays.len();
     hits.clear();
@@ -204,8 +215,24 @@ pub fn sphere_trace_capped(
     let fixed = s.march == March::Fixed;
     let fixed_step = s.fixed_step as f32;
     let mut evals = 0u64;
+    let cap_of = |i: usize| caps.map_or(f32::INFINITY, |c| c[i]);
+    // Past the field's last surface: the cap's hit, or a miss.
+    let beyond = |i: usize| {
+        let cap = cap_of(i);
+        if cap <= tmax {
+            (cap - 0.5 * eps).max(0.0)
+        } else {
+            f32::INFINITY
+        }
+    };
     scratch.active.clear();
-    scratch.active.extend(0..n as u32);
+    for i in 0..n {
+        if far.is_some_and(|f| f[i] < 0.0) {
+            hits[i].t = beyond(i);
+        } else {
+            scratch.active.push(i as u32);
+        }
+    }
     scratch.last.clear();
     scratch.last.resize(n, f32::NAN);
     let mut step = 0;
@@ -235,11 +262,13 @@ pub fn sphere_trace_capped(
                 continue;
             }
             h.t += if fixed { fixed_step } else { d * scale };
-            let cap = caps.map_or(f32::INFINITY, |c| c[i as usize]);
+            let cap = cap_of(i as usize);
             if h.t >= cap && cap <= tmax {
                 // The closed-form surface comes first; stop just outside it,
                 // as a marched hit would (within the hit epsilon).
                 h.t = (cap - 0.5 * eps).max(0.0);
+            } else if far.is_some_and(|f| h.t > f[i as usize]) {
+                h.t = beyond(i as usize);
             } else if h.t > tmax {
                 h.t = f32::INFINITY;
             } else if step < s.max_steps {

@@ -307,19 +307,19 @@ impl Worker<'_> {
     /// The object whose surface is nearest each point (|d| smallest).
     fn nearest_objects(&mut self, ctx: &Ctx, pts: &[(usize, Vec3, f32)], evals: &mut u64) -> Vec<usize> {
         let m = pts.len();
-        if self.object_evals.is_empty() || m == 0 {
+        let Some(objects) = self.objects.as_mut().filter(|_| m > 0) else {
             return vec![0; m];
-        }
+        };
         let xs: Vec<f32> = pts.iter().map(|p| p.1.x).collect();
         let ys: Vec<f32> = pts.iter().map(|p| p.1.y).collect();
         let zs: Vec<f32> = pts.iter().map(|p| p.1.z).collect();
         let mut best = vec![(f32::INFINITY, 0usize); m];
         let mut d = vec![0.0f32; m];
-        for (j, ev) in self.object_evals.iter_mut().enumerate() {
+        for j in 0..objects.len() {
             if ctx.surfaces[j].transparency <= 0.0 {
                 continue;
             }
-            ev.eval(&xs, &ys, &zs, &mut d);
+            objects.field(j).eval(&xs, &ys, &zs, &mut d);
             *evals += m as u64;
             for q in 0..m {
                 if d[q].abs() < best[q].0 {
@@ -338,16 +338,16 @@ impl Worker<'_> {
         let mut out: Vec<Vec<usize>> = nearest.iter().map(|&o| vec![o]).collect();
         // Only transparent objects can share an interface a ray crosses.
         let clear = ctx.surfaces.iter().filter(|s| s.transparency > 0.0).count();
-        if clear < 2 || m == 0 {
+        let Some(objects) = self.objects.as_mut().filter(|_| clear >= 2 && m > 0) else {
             return out;
-        }
+        };
         let near = 4.0 * OFFSET * ctx.scene.render.hit_epsilon as f32;
         let mut d = vec![0.0f32; m];
-        for (j, ev) in self.object_evals.iter_mut().enumerate() {
+        for j in 0..objects.len() {
             if ctx.surfaces[j].transparency <= 0.0 {
                 continue; // only transparent objects are entered
             }
-            ev.eval(&hs.px, &hs.py, &hs.pz, &mut d);
+            objects.field(j).eval(&hs.px, &hs.py, &hs.pz, &mut d);
             *evals += m as u64;
             for q in 0..m {
                 if d[q].abs() < near && !out[q].contains(&j) {

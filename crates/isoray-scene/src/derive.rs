@@ -40,23 +40,6 @@ pub fn analytic_allowed(render: &RenderSettings) -> bool {
     render.blend == 0.0 && render.analytic && render.view != View::Steps
 }
 
-/// min(a,b) − max(k−|a−b|,0)²/(4k), or min(a, b) when k = 0.
-pub(crate) fn smooth_union(b: &mut Builder, x: Node, y: Node, k: f64) -> Node {
-    if k <= 0.0 {
-        return b.min(x, y);
-    }
-    let d = b.sub(x, y);
-    let ad = b.abs(d);
-    let kc = b.constant(k);
-    let kd = b.sub(kc, ad);
-    let zero = b.constant(0.0);
-    let h = b.max(kd, zero);
-    let h2 = b.square(h);
-    let corr = b.mul_c(h2, 0.25 / k);
-    let m = b.min(x, y);
-    b.sub(m, corr)
-}
-
 /// Builds the scene's graph from the objects' fragments: sets each
 /// object's `shape`, and returns the scene's distance (the union, or the
 /// smooth union with k = `render.blend`, folded in file order) and the
@@ -81,7 +64,7 @@ pub(crate) fn assemble(
         None => builder.constant(EMPTY),
         Some((&first, rest)) => rest
             .iter()
-            .fold(first, |acc, &n| smooth_union(&mut builder, acc, n, render.blend)),
+            .fold(first, |acc, &n| builder.smooth_union(acc, n, render.blend)),
     };
     let shape = Shape::from_tape(builder.tape(acc));
     let u = match nodes.split_first() {
@@ -112,7 +95,7 @@ pub(crate) fn assemble(
                 acc = Some(match acc {
                     None => n,
                     Some(a) if unsigned => b.min(a, n),
-                    Some(a) => smooth_union(b, a, n, render.blend),
+                    Some(a) => b.smooth_union(a, n, render.blend),
                 });
             }
             acc.unwrap_or_else(|| b.constant(EMPTY))

@@ -337,7 +337,7 @@ fn smooth_max(b: &mut Builder, a: Node, c: Node, k: f64) -> Node {
         return b.max(a, c);
     }
     let (na, nc) = (b.neg(a), b.neg(c));
-    let u = crate::derive::smooth_union(b, na, nc, k);
+    let u = b.smooth_union(na, nc, k);
     b.neg(u)
 }
 

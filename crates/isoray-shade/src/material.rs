@@ -65,8 +65,16 @@ impl MaterialSample {
     /// Linear interpolation towards `other` by `h`: colours (vectors) by
     /// `Vec3::lerp`, x·(1 − h) + y·h per channel; shininess, transparency and
     /// ior as x + (y − x)·h; the shading model, specular function and
-    /// Fresnel weightings switch to `other`'s at h ≥ 0.5.
+    /// Fresnel weightings switch to `other`'s at h ≥ 0.5. Exact at the
+    /// ends: h ≤ 0 gives `self` and h ≥ 1 gives `other`, bit for bit (the
+    /// renderer relies on both to skip objects that cannot change a blend).
     pub fn mix(&self, other: &MaterialSample, h: f32) -> MaterialSample {
+        if h <= 0.0 {
+            return *self;
+        }
+        if h >= 1.0 {
+            return *other;
+        }
         MaterialSample {
             ambient: self.ambient.lerp(other.ambient, h),
             diffuse: self.diffuse.lerp(other.diffuse, h),

@@ -280,6 +280,119 @@ pub fn eval_interval_choices(
 pub struct IntervalEvaluator<'t> {
     tape: &'t Tape,
     slots: Vec<Interval>,
+    blends: Blends,
+}
+
+/// The smooth minimums of a tape, found by their instructions, which
+/// interval arithmetic bounds far too loosely: min(a, b) − h²/(4k) with
+/// h = max(k − |a − b|, 0) loses that h is large only where a and b are
+/// close, so each one lowers the lower bound by k/4, and a fold of a
+/// thousand objects (a scene's `render.blend`) by hundreds of k. The
+/// function is nondecreasing in a and in b, so its exact range over a box
+/// is [f(a.lo, b.lo), f(a.hi, b.hi)]: the evaluator intersects the
+/// instructions' bound with that.
+#[derive(Debug, Clone, Default)]
+struct Blends {
+    /// The tape they were found in ([`Tape::id`]; 0: none yet).
+    tape: u64,
+    /// Per slot: the instruction that last wrote it, or [`UNWRITTEN`].
+    defs: Vec<u32>,
+    /// Per instruction: the writers of its operands a and b.
+    ops: Vec<[u32; 2]>,
+    /// Per instruction: 0; 1 for the `min` of a smooth minimum (its
+    /// operands' bounds are kept in `args`); 2 for its last instruction
+    /// (`ends` says which `min` and which k).
+    role: Vec<u8>,
+    ends: Vec<(u32, f64)>,
+    args: Vec<(Interval, Interval)>,
+}
+
+/// A slot no instruction writes (an input, constant or prologue value).
+const UNWRITTEN: u32 = u32::MAX;
+
+/// The quadratic smooth minimum min(a, b) − max(k − |a − b|, 0)²/(4k).
+fn smooth_min(a: f64, b: f64, k: f64) -> f64 {
+    let h = (k - (a - b).abs()).max(0.0);
+    a.min(b) - h * h * (0.25 / k)
+}
+
+impl Blends {
+    /// Finds the smooth minimums of `instrs`; `slots` holds the values of
+    /// the slots no instruction writes.
+    fn find(&mut self, instrs: &[Instr], slots: &[Interval]) {
+        let n = instrs.len();
+        self.defs.clear();
+        self.defs.resize(slots.len(), UNWRITTEN);
+        self.ops.clear();
+        self.role.clear();
+        self.role.resize(n, 0);
+        self.ends.clear();
+        self.ends.resize(n, (0, 0.0));
+        if self.args.len() < n {
+            self.args.resize(n, (WHOLE, WHOLE));
+        }
+        for (i, ins) in instrs.iter().enumerate() {
+            let (out, a, b) = match *ins {
+                Instr::Unary { out, a, .. } => (out, a, a),
+                Instr::Binary { out, a, b, .. } => (out, a, b),
+                Instr::Select { out, a, b, .. } => (out, a, b),
+                Instr::Skip { .. } => {
+                    self.ops.push([UNWRITTEN; 2]);
+                    continue;
+                }
+            };
+            self.ops.push([self.defs[a as usize], self.defs[b as usize]]);
+            self.defs[out as usize] = i as u32;
+            if let Some((m, k)) = self.matches(instrs, slots, i) {
+                self.role[m as usize] = 1;
+                self.role[i] = 2;
+                self.ends[i] = (m, k);
+            }
+        }
+    }
+
+    /// Whether instruction `i` ends a smooth minimum: Some((its `min`, k)).
+    fn matches(&self, instrs: &[Instr], slots: &[Interval], i: usize) -> Option<(u32, f64)> {
+        let ops = &self.ops;
+        // A constant or prologue value (no instruction writes it, and it
+        // is not x, y or z), known exactly.
+        let known = |slot: u32, def: u32| {
+            let v = slots[slot as usize];
+            (slot >= 3 && def == UNWRITTEN && v.lo == v.hi).then_some(v.lo)
+        };
+        let binary = |i: u32, want: BinOp| match instrs.get(i as usize) {
+            Some(&Instr::Binary { op, a, b, .. }) if op == want => Some((a, b, ops[i as usize])),
+            _ => None,
+        };
+        let unary = |i: u32, want: UnOp| match instrs.get(i as usize) {
+            Some(&Instr::Unary { op, .. }) if op == want => Some(ops[i as usize][0]),
+            _ => None,
+        };
+        // m − c·h² with m = min(x, y)
+        let (_, _, [m, corr]) = binary(i as u32, BinOp::Sub)?;
+        let (_, _, xy) = binary(m, BinOp::Min)?;
+        let (ca, cb, [da, db]) = binary(corr, BinOp::Mul)?;
+        let (c, h2) = match (known(ca, da), known(cb, db)) {
+            (Some(c), None) => (c, db),
+            (None, Some(c)) => (c, da),
+            _ => return None,
+        };
+        // h = max(k − |d|, 0)
+        let h = unary(h2, UnOp::Square)?;
+        let (ha, hb, [dha, dhb]) = binary(h, BinOp::Max)?;
+        let kd = match (known(ha, dha), known(hb, dhb)) {
+            (None, Some(0.0)) => dha,
+            (Some(0.0), None) => dhb,
+            _ => return None,
+        };
+        let (ks, _, [dk, ad]) = binary(kd, BinOp::Sub)?;
+        let k = known(ks, dk).filter(|&k| k > 0.0 && k.is_finite())?;
+        // d = x − y or y − x
+        let d = unary(ad, UnOp::Abs)?;
+        let (_, _, ab) = binary(d, BinOp::Sub)?;
+        let same = ab == xy || ab == [xy[1], xy[0]];
+        (same && (c * 4.0 * k - 1.0).abs() < 1e-12).then_some((m, k))
+    }
 }
 
 /// How far apart two operands' intervals must be for one to win a `min` or
@@ -301,7 +414,11 @@ impl<'t> IntervalEvaluator<'t> {
         for (k, v) in tape.prologue().run(vars, &mut scratch) {
             s[k] = Interval::point(v);
         }
-        IntervalEvaluator { tape, slots: s }
+        IntervalEvaluator {
+            tape,
+            slots: s,
+            blends: Blends::default(),
+        }
     }
 
     /// Bounds of `variant` (this evaluator's tape or a rewrite of it, see
@@ -316,12 +433,17 @@ impl<'t> IntervalEvaluator<'t> {
             variant.same_frame(self.tape),
             "a variant must keep its tape's slots and constants"
         );
+        if self.blends.tape != variant.id() {
+            self.blends.find(variant.instrs(), &self.slots);
+            self.blends.tape = variant.id();
+        }
+        let blends = &mut self.blends;
         let s = &mut self.slots;
         s[..3].copy_from_slice(&xyz);
         if let Some(c) = choices.as_deref_mut() {
             c.clear();
         }
-        for ins in variant.instrs() {
+        for (i, ins) in variant.instrs().iter().enumerate() {
             let mut choice = Choice::Both;
             match *ins {
                 // Lazy regions are evaluated: their select takes the hull where c may be ≤ 0.
@@ -336,7 +458,17 @@ impl<'t> IntervalEvaluator<'t> {
                         BinOp::Max if separated(ia.hi, ib.lo) => Choice::Right,
                         _ => Choice::Both,
                     };
-                    s[out as usize] = Interval::binary(op, ia, ib);
+                    let mut r = Interval::binary(op, ia, ib);
+                    match blends.role[i] {
+                        1 => blends.args[i] = (ia, ib),
+                        2 => {
+                            let (m, k) = blends.ends[i];
+                            let (a, b) = blends.args[m as usize];
+                            r = tighter(r, a, b, k);
+                        }
+                        _ => {}
+                    }
+                    s[out as usize] = r;
                 }
                 Instr::Select { out, c, a, b } => {
                     let ci = s[c as usize];
@@ -354,6 +486,29 @@ impl<'t> IntervalEvaluator<'t> {
             }
         }
         s[variant.output()]
+    }
+}
+
+/// `r` (a bound of a smooth minimum of width `k` of operands bounded by
+/// `a` and `b`) intersected with the function's exact range.
+fn tighter(r: Interval, a: Interval, b: Interval, k: f64) -> Interval {
+    let (lo, hi) = (smooth_min(a.lo, b.lo, k), smooth_min(a.hi, b.hi, k));
+    // Rounding of the few operations, relative to their operands' size.
+    let slack = |m: f64| 16.0 * f64::EPSILON * (m.abs() + k) + f64::MIN_POSITIVE;
+    let lo = if lo.is_nan() {
+        f64::NEG_INFINITY
+    } else {
+        lo - slack(a.lo.min(b.lo))
+    };
+    let hi = if hi.is_nan() {
+        f64::INFINITY
+    } else {
+        hi + slack(a.hi.min(b.hi))
+    };
+    if lo.max(r.lo) <= hi.min(r.hi) {
+        Interval::new(lo.max(r.lo), hi.min(r.hi))
+    } else {
+        r
     }
 }
 
@@ -449,6 +604,72 @@ mod tests {
                         "{src}: {v} not in {r:?} over box at {c:?} ± {h}"
                     );
                 }
+            }
+        }
+    }
+
+    /// A chain of smooth unions as a scene's `render.blend` builds it
+    /// ([`crate::ir::Builder::smooth_union`]) of spheres of radius
+    /// `r` at `centres`.
+    fn blended_spheres(centres: &[[f64; 3]], r: f64, k: f64) -> Tape {
+        use crate::ir::Builder;
+        let mut b = Builder::new();
+        let (x, y, z) = (b.x(), b.y(), b.z());
+        let mut acc = None;
+        for c in centres {
+            let dx = b.add_c(x, -c[0]);
+            let dy = b.add_c(y, -c[1]);
+            let dz = b.add_c(z, -c[2]);
+            let (sx, sy, sz) = (b.square(dx), b.square(dy), b.square(dz));
+            let sxy = b.add(sx, sy);
+            let s = b.add(sxy, sz);
+            let len = b.sqrt(s);
+            let d = b.add_c(len, -r);
+            acc = Some(match acc {
+                None => d,
+                Some(a) => b.smooth_union(a, d, k),
+            });
+        }
+        b.tape(acc.unwrap())
+    }
+
+    /// Bounds of a fold of smooth unions stay within k of the nearest
+    /// object's (plain interval arithmetic loses k/4 per object), and
+    /// contain every sampled value.
+    #[test]
+    fn smooth_union_folds_are_bounded_tightly() {
+        let mut seed = 5u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let centres: Vec<[f64; 3]> = (0..60).map(|_| [0.0; 3].map(|_: f64| rnd() * 4.0 - 2.0)).collect();
+        let (r, k) = (0.3, 0.4);
+        let tape = blended_spheres(&centres, r, k);
+        let mut ev = IntervalEvaluator::new(&tape, &[]);
+        let point = |p: [f64; 3]| {
+            let mut e = crate::PointEvaluator::<f64>::new(&tape);
+            e.eval(&[], p[0], p[1], p[2])
+        };
+        for round in 0..200 {
+            let c = [0.0; 3].map(|_: f64| rnd() * 10.0 - 5.0);
+            let h = if round % 2 == 0 { 0.05 } else { rnd() * 1.5 };
+            let bx = c.map(|v| Interval::new(v - h, v + h));
+            let got = ev.eval(&tape, bx, None);
+            // The nearest sphere's distance over the box, exactly.
+            let near = centres
+                .iter()
+                .map(|q| {
+                    let d2: f64 = (0..3).map(|i| (q[i] - c[i]).abs().max(h) - h).map(|v| v * v).sum();
+                    d2.sqrt() - r
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!(got.lo >= near - k - 1e-9, "lower bound {} far below {near} - k", got.lo);
+            for _ in 0..10 {
+                let p: [f64; 3] = std::array::from_fn(|i| c[i] + (rnd() * 2.0 - 1.0) * h);
+                assert!(got.contains(point(p)), "{} not in {got:?}", point(p));
             }
         }
     }

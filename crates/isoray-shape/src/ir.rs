@@ -498,6 +498,25 @@ impl Builder {
         let c = self.constant(c);
         self.add(a, c)
     }
+    /// The quadratic smooth union of width `k`:
+    /// min(a, b) − max(k − |a − b|, 0)²·(0.25/k), or min(a, b) when k ≤ 0.
+    /// The interval evaluator recognises these instructions and bounds
+    /// them by the function's exact range ([`crate::interval`]).
+    pub fn smooth_union(&mut self, a: Node, b: Node, k: f64) -> Node {
+        if k <= 0.0 {
+            return self.min(a, b);
+        }
+        let d = self.sub(a, b);
+        let ad = self.abs(d);
+        let kc = self.constant(k);
+        let kd = self.sub(kc, ad);
+        let zero = self.constant(0.0);
+        let h = self.max(kd, zero);
+        let h2 = self.square(h);
+        let corr = self.mul_c(h2, 0.25 / k);
+        let m = self.min(a, b);
+        self.sub(m, corr)
+    }
     /// clamp(a, lo, hi) = min(max(a, lo), hi)
     pub fn clamp(&mut self, a: Node, lo: Node, hi: Node) -> Node {
         let m = self.max(a, lo);
@@ -980,7 +999,7 @@ impl InputCache {
 /// then the values the [`Prologue`] computes from the inputs; the remaining
 /// slots are reused by the instructions. No instruction writes a slot it
 /// reads, so evaluators may borrow inputs and output disjointly.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Clone)]
 pub struct Tape {
     /// What every rewrite of the tape ([`Tape::with_instrs`]) shares with
     /// it: constants, prologue and inputs, behind one pointer so that a
@@ -990,6 +1009,36 @@ pub struct Tape {
     instrs: Vec<Instr>,
     slots: u32,
     output: u32,
+    /// Names this list of instructions (see [`Tape::id`]).
+    id: u64,
+}
+
+// Equality and Debug leave the id out: it names a tape, it is not part of
+// what the tape computes.
+impl std::fmt::Debug for Tape {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Tape")
+            .field("frame", &self.frame)
+            .field("instrs", &self.instrs)
+            .field("slots", &self.slots)
+            .field("output", &self.output)
+            .finish()
+    }
+}
+
+impl PartialEq for Tape {
+    fn eq(&self, other: &Tape) -> bool {
+        self.frame == other.frame
+            && self.instrs == other.instrs
+            && self.slots == other.slots
+            && self.output == other.output
+    }
+}
+
+/// A number no tape made before has.
+fn fresh_id() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 /// The part of a [`Tape`] its rewrites share.
@@ -1210,6 +1259,7 @@ impl Tape {
             instrs,
             slots: next_slot,
             output: output_slot,
+            id: fresh_id(),
         }
     }
 
@@ -1271,7 +1321,15 @@ impl Tape {
             instrs,
             slots: self.slots,
             output: self.output,
+            id: fresh_id(),
         }
+    }
+
+    /// A number that names this tape's instructions: tapes made separately
+    /// have different ones, a clone (and [`Tape::bind`]) keeps it. For
+    /// evaluators that cache what they learn of a tape's instructions.
+    pub fn id(&self) -> u64 {
+        self.id
     }
 
     /// True when `other` is a rewrite of this tape (or the other way
