@@ -490,6 +490,18 @@ fn block_grid(x0: u32, y0: u32, tw: u32, th: u32, n: u32) -> Vec<(u32, u32)> {
     out
 }
 
+/// Whether the closed-form surface `a` blocks the shadow ray o + t·d
+/// marched from t = `start` to `tmax` with the occluder threshold `eps`: as
+/// a march would, when the ray starts within `eps` of it (or inside) or
+/// meets it before `tmax`.
+fn blocks(a: &isoray_scene::analytic::Analytic, o: [f32; 3], d: [f32; 3], start: f32, tmax: f32, eps: f32) -> bool {
+    let p: [f64; 3] = std::array::from_fn(|k| (o[k] + d[k] * start) as f64);
+    if a.distance(p) < eps as f64 {
+        return true;
+    }
+    a.intersect(o, d).iter().any(|&t| t >= start && t < tmax)
+}
+
 /// Read-only render context shared by all workers.
 struct Ctx<'s> {
     scene: &'s Scene,
@@ -511,6 +523,8 @@ struct Ctx<'s> {
     /// marching once they leave it.
     scene_reach: Option<reach::Reach>,
     rest_reach: Option<reach::Reach>,
+    /// The same for what hard shadow rays march beside closed forms.
+    shadow_reach: Option<reach::Reach>,
 }
 
 impl<'s> Ctx<'s> {
@@ -548,12 +562,17 @@ impl<'s> Ctx<'s> {
             |tape: &isoray_shape::Tape| domain.map(|(c, h)| reach::Reach::new(tape, &scene.inputs, c, h, above, rays));
         let scene_reach = reach_of(scene.shape.tape());
         let rest_reach = scene.derived().rest.as_ref().and_then(|r| reach_of(r.tape()));
+        let shadow_reach = match &scene.derived().shadow {
+            Some(sh) => sh.opaque_rest.as_ref().and_then(|r| reach_of(r.tape())),
+            None => rest_reach,
+        };
         Ctx {
             scene,
             cam,
             domain,
             scene_reach,
             rest_reach,
+            shadow_reach,
             surfaces,
             material_of,
             material_surfaces,
@@ -624,6 +643,7 @@ impl<'s> Worker<'s> {
                 opaque: field(sh.opaque.tape()),
                 clear: field(sh.transparent.tape()),
                 clear_surfaces: field(sh.transparent_surfaces.tape()),
+                opaque_rest: sh.opaque_rest.as_ref().map(|r| field(r.tape())),
             }),
             objects,
             scratch: Scratch::default(),
@@ -1015,22 +1035,68 @@ impl<'s> Worker<'s> {
                     start.push(md);
                 }
             }
+            // Hard shadows: planes and spheres in closed form block the rays
+            // that meet them, and the other objects are marched, no further
+            // than the box their surface lies in.
+            let closed = mode == ShadowMode::Hard
+                && match &self.shadow_evals {
+                    Some(se) => se.opaque_rest.is_some(),
+                    None => self.rest_eval.is_some(),
+                };
+            let mut blocked = Vec::new();
+            // How far each ray marches (meshes and transparent objects
+            // beyond that still count, below).
+            let mut reach_t = tmax.clone();
+            if closed {
+                let eps = if s.shadow_epsilon > 0.0 {
+                    s.shadow_epsilon
+                } else {
+                    s.hit_epsilon
+                } as f32;
+                // The opaque ones (transparent objects transmit, below).
+                let analytic: Vec<&isoray_scene::analytic::Analytic> = (scene.derived().analytic.iter())
+                    .zip(&ctx.surfaces)
+                    .filter(|(_, sf)| self.shadow_evals.is_none() || sf.transparency <= 0.0)
+                    .filter_map(|(a, _)| a.as_ref())
+                    .collect();
+                for r in 0..shadow_rays.len() {
+                    let (o, d) = (shadow_rays.origin(r), shadow_rays.direction(r));
+                    let hit = analytic
+                        .iter()
+                        .any(|a| blocks(a, o, d, s.shadow_start as f32, tmax[r], eps));
+                    blocked.push(hit);
+                    if hit {
+                        reach_t[r] = -1.0; // not marched
+                    } else if let Some(reach) = &ctx.shadow_reach {
+                        reach_t[r] = tmax[r].min(reach.far(o, d, tmax[r]));
+                    }
+                }
+            }
             // With transparent objects, opaque ones occlude (with the penumbra
             // estimate) and transparent ones transmit, traced separately.
-            let occluders = match &mut self.shadow_evals {
-                Some(se) => &mut se.opaque,
-                None => &mut self.scene_eval,
+            let occluders = match (&mut self.shadow_evals, self.rest_eval.as_mut()) {
+                (Some(se), _) => match (&mut se.opaque_rest, closed) {
+                    (Some(rest), true) => rest,
+                    _ => &mut se.opaque,
+                },
+                (None, Some(rest)) if closed => rest,
+                (None, _) => &mut self.scene_eval,
             };
             *evals += shadow_march(
                 occluders,
                 &shadow_rays,
-                &tmax,
+                &reach_t,
                 mode,
                 light.size as f32,
                 s,
                 &mut self.scratch,
                 &mut vis,
             );
+            for (v, &b) in vis.iter_mut().zip(&blocked) {
+                if b {
+                    *v = 0.0;
+                }
+            }
             // Meshes block what reaches them (hard shadows).
             if mode != ShadowMode::None {
                 meshes::occlude(&scene.meshes, &shadow_rays, &tmax, &mut vis);

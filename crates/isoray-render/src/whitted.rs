@@ -26,6 +26,8 @@ pub(crate) struct ShadowEvals<'s> {
     pub(crate) clear: crate::trace::Field<'s>,
     /// The unsigned distance to the nearest transparent surface.
     pub(crate) clear_surfaces: crate::trace::Field<'s>,
+    /// The opaque objects not in closed form, when some are.
+    pub(crate) opaque_rest: Option<crate::trace::Field<'s>>,
 }
 
 /// Interfaces a shadow ray crosses at most (it keeps its transmission after).

@@ -78,6 +78,12 @@ pub(crate) fn assemble(
         }
     };
     let surfaces = Shape::from_tape(builder.tape(u));
+    // Planes and spheres are intersected in closed form; the rest is marched.
+    let analytic: Vec<Option<Analytic>> = if analytic_allowed(render) {
+        objects.iter().map(|o| o.closed_form(inputs)).collect()
+    } else {
+        vec![None; objects.len()]
+    };
     // Shadows with transparent objects: opaque objects occlude (with the
     // penumbra estimate), transparent ones transmit (traced separately).
     let clear: Vec<bool> = objects
@@ -103,19 +109,25 @@ pub(crate) fn assemble(
         let opaque = pick(&mut builder, false, false);
         let clear_union = pick(&mut builder, true, false);
         let clear_surfaces = pick(&mut builder, true, true);
+        // The opaque objects not in closed form (analytic objects are
+        // never blended: `analytic_allowed`).
+        let closed = |k: usize| analytic[k].is_some();
+        let opaque_rest = (0..nodes.len()).any(|k| !clear[k] && closed(k)).then(|| {
+            let rest = (0..nodes.len())
+                .filter(|&k| !clear[k] && !closed(k))
+                .map(|k| nodes[k])
+                .reduce(|a, n| builder.min(a, n))
+                .unwrap_or_else(|| builder.constant(EMPTY));
+            Shape::from_tape(builder.tape(rest))
+        });
         Some(ShadowShapes {
             opaque: Shape::from_tape(builder.tape(opaque)),
             transparent: Shape::from_tape(builder.tape(clear_union)),
             transparent_surfaces: Shape::from_tape(builder.tape(clear_surfaces)),
+            opaque_rest,
         })
     } else {
         None
-    };
-    // Planes and spheres are intersected in closed form; the rest is marched.
-    let analytic: Vec<Option<Analytic>> = if analytic_allowed(render) {
-        objects.iter().map(|o| o.closed_form(inputs)).collect()
-    } else {
-        vec![None; objects.len()]
     };
     let rest = if analytic.iter().any(Option::is_some) {
         let mut acc: Option<Node> = None;

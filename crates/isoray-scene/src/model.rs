@@ -1245,6 +1245,11 @@ pub struct ShadowShapes {
     pub transparent: Shape,
     /// The unsigned distance to the nearest transparent surface.
     pub transparent_surfaces: Shape,
+    /// When some opaque object is a plane or sphere in closed form
+    /// ([`crate::Derived::analytic`]): the union of the other opaque
+    /// objects, which hard shadow rays march while the closed forms are
+    /// intersected.
+    pub opaque_rest: Option<Shape>,
 }
 
 /// The range declared for a number parameter: `{ default = 1.0, range = [0.5, 2.0] }`.
