@@ -739,8 +739,40 @@ impl Builder {
     }
 
     /// Extracts the nodes that `output` depends on as an evaluation tape.
+    /// Costs about the number of those nodes, however many others the
+    /// builder holds (a scene builds every object's tape from one builder).
     pub fn tape(&self, output: Node) -> Tape {
-        Tape::extract(&self.ops, &self.lazy, output)
+        let n = output.0 as usize + 1;
+        let mut keep = Vec::new();
+        let mut seen = vec![false; n];
+        let mut stack = vec![output.0 as usize];
+        seen[output.0 as usize] = true;
+        while let Some(i) = stack.pop() {
+            keep.push(i);
+            let (ops, k) = operand_array(&self.ops[i]);
+            for m in &ops[..k] {
+                let m = m.0 as usize;
+                if !seen[m] {
+                    seen[m] = true;
+                    stack.push(m);
+                }
+            }
+        }
+        if keep.len() == n {
+            return Tape::extract(&self.ops, &self.lazy, output);
+        }
+        // The needed nodes alone, in their order: the same tape.
+        keep.sort_unstable();
+        let mut map = vec![u32::MAX; n];
+        for (j, &i) in keep.iter().enumerate() {
+            map[i] = j as u32;
+        }
+        let ops: Vec<Op> = keep.iter().map(|&i| renamed(self.ops[i], &map)).collect();
+        let lazy = (self.lazy.iter())
+            .filter(|l| (l.0 as usize) < n && map[l.0 as usize] != u32::MAX)
+            .map(|l| Node(map[l.0 as usize]))
+            .collect();
+        Tape::extract(&ops, &lazy, Node(map[output.0 as usize]))
     }
 }
 
@@ -755,11 +787,29 @@ enum Emit {
 
 /// The operands of an operation.
 fn operands_of(op: &Op) -> Vec<Node> {
+    let (ops, n) = operand_array(op);
+    ops[..n].to_vec()
+}
+
+/// The operands of an operation without allocating: the first n of the array.
+fn operand_array(op: &Op) -> ([Node; 3], usize) {
+    let z = Node(0);
     match *op {
-        Op::Unary(_, a) => vec![a],
-        Op::Binary(_, a, b) => vec![a, b],
-        Op::Select(c, a, b) => vec![c, a, b],
-        _ => Vec::new(),
+        Op::Unary(_, a) => ([a, z, z], 1),
+        Op::Binary(_, a, b) => ([a, b, z], 2),
+        Op::Select(c, a, b) => ([c, a, b], 3),
+        _ => ([z; 3], 0),
+    }
+}
+
+/// `op` with its operands renamed by `map`.
+fn renamed(op: Op, map: &[u32]) -> Op {
+    let m = |n: Node| Node(map[n.0 as usize]);
+    match op {
+        Op::Unary(o, a) => Op::Unary(o, m(a)),
+        Op::Binary(o, a, b) => Op::Binary(o, m(a), m(b)),
+        Op::Select(c, a, b) => Op::Select(m(c), m(a), m(b)),
+        other => other,
     }
 }
 
@@ -1052,13 +1102,9 @@ struct Frame {
 impl Tape {
     fn extract(ops: &[Op], lazy: &std::collections::HashSet<Node>, output: Node) -> Tape {
         let n = output.0 as usize + 1;
-        let operands = |i: usize| -> Vec<Node> {
-            match ops[i] {
-                Op::Unary(_, a) => vec![a],
-                Op::Binary(_, a, b) => vec![a, b],
-                Op::Select(c, a, b) => vec![c, a, b],
-                _ => Vec::new(),
-            }
+        let operands = |i: usize| {
+            let (o, k) = operand_array(&ops[i]);
+            o.into_iter().take(k)
         };
         // Uniform nodes depend on no coordinate: the prologue computes them.
         let mut uniform = vec![false; n];
@@ -1066,7 +1112,7 @@ impl Tape {
             uniform[i] = match ops[i] {
                 Op::Const(_) | Op::Input(_) => true,
                 Op::X | Op::Y | Op::Z => false,
-                _ => operands(i).iter().all(|m| uniform[m.0 as usize]),
+                _ => operands(i).all(|m| uniform[m.0 as usize]),
             };
         }
         // Which nodes the output needs.
@@ -1240,7 +1286,7 @@ impl Tape {
             instrs.push(instr);
             // Free operands whose last use is this instruction (after choosing `out`,
             // so that no instruction writes a slot it reads).
-            let mut ops_i = operands(i);
+            let mut ops_i: Vec<Node> = operands(i).collect();
             ops_i.sort();
             ops_i.dedup();
             for m in ops_i {
@@ -1690,6 +1736,45 @@ mod tests {
                 Instr::Skip { .. } => {}
             }
         }
+    }
+
+    /// A tape taken from a builder that holds other shapes too (a scene's
+    /// objects) is the tape of its shape alone.
+    #[test]
+    fn tapes_ignore_the_rest_of_the_builder() {
+        let blob = |b: &mut Builder, c: f64| {
+            let (x, y, z) = (b.x(), b.y(), b.z());
+            let dx = b.add_c(x, -c);
+            let (sx, sy, sz) = (b.square(dx), b.square(y), b.square(z));
+            let s1 = b.add(sx, sy);
+            let s = b.add(s1, sz);
+            let len = b.sqrt(s);
+            let zero = b.constant(0.0);
+            let pos = b.max(y, zero);
+            let d = b.add_c(len, -0.5);
+            b.sub(d, pos)
+        };
+        let mut many = Builder::new();
+        let mut last = blob(&mut many, 0.0);
+        for i in 1..50 {
+            let n = blob(&mut many, i as f64);
+            last = many.smooth_union(last, n, 0.1);
+        }
+        let alone_node = blob(&mut many, 7.25);
+        let mut one = Builder::new();
+        let node = blob(&mut one, 7.25);
+        let alone = one.tape(node);
+        let taken = many.tape(alone_node);
+        // The same instructions (shared nodes may come in another order).
+        assert_eq!(taken.len(), alone.len());
+        let (mut a, mut b) = (
+            crate::PointEvaluator::<f64>::new(&taken),
+            crate::PointEvaluator::<f64>::new(&alone),
+        );
+        for p in [[7.0, 0.2, -0.1], [0.0, -1.0, 3.0], [7.5, 0.4, 0.3]] {
+            assert_eq!(a.eval(&[], p[0], p[1], p[2]), b.eval(&[], p[0], p[1], p[2]));
+        }
+        assert!(many.tape(last).len() > 40 * taken.len());
     }
 
     /// Builds sphere(p - (k, 0, 0), r·2) + sin(t) with k, r inputs, or with
