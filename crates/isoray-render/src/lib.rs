@@ -558,8 +558,13 @@ impl<'s> Ctx<'s> {
                 1.0
             };
         let rays = r.width as u64 * r.height as u64 * (r.aa as u64).pow(2);
-        let reach_of =
-            |tape: &isoray_shape::Tape| domain.map(|(c, h)| reach::Reach::new(tape, &scene.inputs, c, h, above, rays));
+        // Not in the steps view, which shows the march as it is without
+        // them (as it does without closed forms).
+        let reach_of = |tape: &isoray_shape::Tape| {
+            domain
+                .filter(|_| r.view != View::Steps)
+                .map(|(c, h)| reach::Reach::new(tape, &scene.inputs, c, h, above, rays))
+        };
         let scene_reach = reach_of(scene.shape.tape());
         let rest_reach = scene.derived().rest.as_ref().and_then(|r| reach_of(r.tape()));
         let shadow_reach = match &scene.derived().shadow {

@@ -59,11 +59,39 @@ impl Analytic {
         }
     }
 
+    /// Points on the surface and a little off it on both sides: the probes
+    /// moved onto it (a plane), or directions from the centre (a sphere).
+    fn near_points(&self, probes: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        let mut out = Vec::new();
+        for (i, &q) in probes.iter().enumerate() {
+            let off = [0.0, 0.05, -0.05, 0.3, -0.3][i % 5];
+            match *self {
+                Analytic::Plane { n, h } => {
+                    let t = dot(n, q) + h - off;
+                    out.push([q[0] - t * n[0], q[1] - t * n[1], q[2] - t * n[2]]);
+                }
+                Analytic::Sphere { c, r } => {
+                    let u = sub(q, c);
+                    let l = len(u);
+                    if l > 0.0 {
+                        let s = (r + off * r) / l;
+                        out.push([c[0] + s * u[0], c[1] + s * u[1], c[2] + s * u[2]]);
+                    }
+                }
+            }
+        }
+        out
+    }
+
     /// Recognises a plane or a sphere, with the inputs `vars`.
     pub fn recognise(shape: &Shape, vars: &[f64]) -> Option<Analytic> {
         let pts = probes();
+        // Equal at the probes, and on and near the candidate's own surface:
+        // a shape clipped by a sphere, max(f, sphere(p, r)), is that
+        // sphere's distance at every probe far from it, not at its surface.
         let matches = |a: &Analytic| {
-            pts.iter().all(|&p| {
+            let near = a.near_points(&pts);
+            pts.iter().chain(&near).all(|&p| {
                 let (d, e) = (shape.eval_with(vars, p), a.distance(p));
                 d.is_finite() && (d - e).abs() <= 1e-9 * (1.0 + e.abs())
             })
@@ -169,6 +197,12 @@ mod tests {
         assert_eq!(rec("box(p, vec3(1.0))"), None);
         assert_eq!(rec("sphere(p, 1.0) * 0.5"), None); // a bound, not the distance
         assert_eq!(rec("p.y - 0.1 * sin(p.x)"), None);
+        // (Shapes clipped by a ball: tests/surfaces.rs, the algebraic gallery.)
+        // Still a sphere where the clip never matters.
+        assert!(matches!(
+            rec("max(sphere(p, 1.0), sphere(p, 1.5))"),
+            Some(Analytic::Sphere { .. })
+        ));
     }
 
     #[test]

@@ -321,3 +321,18 @@ fn huge_equations_do_not_hang() {
     assert!(s.distance([0.0, 0.0, 0.0]) < 0.0);
     assert!(start.elapsed().as_secs() < 20, "{:?}", start.elapsed());
 }
+
+/// The algebraic gallery clips each surface by a ball (`max(f, sphere(q,
+/// r))`): far from it that is the ball's distance, so sampling far away
+/// alone took the torus, the Kummer quartic and the Barth sextic for balls
+/// in closed form, and the tracer drew balls. Nothing there is a plane or
+/// a sphere.
+#[test]
+fn clipped_surfaces_are_not_taken_for_their_balls() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/algebraic.toml");
+    let s = isoray_scene::load(std::path::Path::new(path), &[]).unwrap_or_else(|e| panic!("{}", e.rendered));
+    assert_eq!(s.objects.len(), 8);
+    for (k, a) in s.derived().analytic.iter().enumerate() {
+        assert!(a.is_none(), "object {k} taken for {a:?}");
+    }
+}
