@@ -281,6 +281,9 @@ pub struct IntervalEvaluator<'t> {
     tape: &'t Tape,
     slots: Vec<Interval>,
     blends: Blends,
+    /// Whether the tape has a smooth minimum (its rewrites, which only drop
+    /// and forward instructions, are not searched when it has none).
+    any_blends: bool,
 }
 
 /// The smooth minimums of a tape, found by their instructions, which
@@ -414,10 +417,15 @@ impl<'t> IntervalEvaluator<'t> {
         for (k, v) in tape.prologue().run(vars, &mut scratch) {
             s[k] = Interval::point(v);
         }
+        let mut blends = Blends::default();
+        blends.find(tape.instrs(), &s);
+        blends.tape = tape.id();
+        let any_blends = blends.role.contains(&2);
         IntervalEvaluator {
             tape,
             slots: s,
-            blends: Blends::default(),
+            blends,
+            any_blends,
         }
     }
 
@@ -433,7 +441,8 @@ impl<'t> IntervalEvaluator<'t> {
             variant.same_frame(self.tape),
             "a variant must keep its tape's slots and constants"
         );
-        if self.blends.tape != variant.id() {
+        let any_blends = self.any_blends;
+        if any_blends && self.blends.tape != variant.id() {
             self.blends.find(variant.instrs(), &self.slots);
             self.blends.tape = variant.id();
         }
@@ -459,7 +468,7 @@ impl<'t> IntervalEvaluator<'t> {
                         _ => Choice::Both,
                     };
                     let mut r = Interval::binary(op, ia, ib);
-                    match blends.role[i] {
+                    match if any_blends { blends.role[i] } else { 0 } {
                         1 => blends.args[i] = (ia, ib),
                         2 => {
                             let (m, k) = blends.ends[i];
