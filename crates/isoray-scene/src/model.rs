@@ -391,7 +391,7 @@ settings! {
         /// form (not with `blend` > 0 or the steps view).
         analytic: bool = true, boolean(), "objects whose distance is exactly a plane's or a sphere's (recognised numerically, whatever the text) are intersected in closed form and the other objects are marched up to them; not with `blend` > 0 or `view = \"steps\"`";
         /// Evaluate each region of space with the tape simplified for it.
-        prune: bool = true, boolean(), "the CPU tracer evaluates each region of space with the scene's tape simplified for it (the `min`/`max` branches that cannot win there dropped; tapes of fewer than 500 instructions always run whole): the same image, bit for bit; `false` runs the whole tape at every step";
+        prune: bool = true, boolean(), "the CPU tracer evaluates each region of space with the scene's tape simplified for it (the `min`/`max` branches that cannot win there dropped; tapes of fewer than 500 instructions always run whole), and rays stop marching once they leave the box the surface lies in (found by interval bounds; not in the steps view): the same image, bit for bit; `false` runs the whole tape at every step, up to `max_distance`";
         /// Parallax mapping of dent maps.
         parallax: Parallax = Parallax::None, choice::<Parallax>(), "parallax mapping of dent maps (`dents = \"bump\"`), in every renderer: `\"none\"` (normal mapping at the hit), `\"offset\"` (offset limiting: the texel shifted by depth × the view's tangent part), `\"steep\"` (the view ray marched down through `parallax_steps` layers) or `\"occlusion\"` (steep, with the crossing interpolated: parallax occlusion mapping)";
         /// Layers of steep and occlusion parallax.
