@@ -380,7 +380,14 @@ fn render_into(
     let region = region.clip(w, h);
     let cam = RayCamera::new(&scene.camera, w, h);
     let tiles = grid_tiles(w, h, region);
-    let ctx = Ctx::new(scene, cam);
+    // The surface's reach pays for itself on the passes that trace every
+    // pixel, not on a preview's coarse blocks (which it would delay).
+    let rays = match pass {
+        Pass::Blocks(_) => None,
+        Pass::Pixels => Some(region.width as u64 * region.height as u64),
+        Pass::Final => Some(region.width as u64 * region.height as u64 * (scene.render.aa as u64).pow(2)),
+    };
+    let ctx = Ctx::new(scene, cam, rays);
     let done = AtomicU64::new(0);
     let total = tiles.len() as u64;
     // One worker per thread, taking the next tile as it finishes one: a
@@ -528,7 +535,9 @@ struct Ctx<'s> {
 }
 
 impl<'s> Ctx<'s> {
-    fn new(scene: &'s Scene, cam: RayCamera) -> Self {
+    /// The context of a pass tracing `rays` primary rays (None: a coarse
+    /// pass, without the surfaces' reach).
+    fn new(scene: &'s Scene, cam: RayCamera, rays: Option<u64>) -> Self {
         let h = scene.render.normal_epsilon;
         let gradient = match scene.render.normals {
             NormalMethod::Central => GradientMode::Central(h),
@@ -557,13 +566,11 @@ impl<'s> Ctx<'s> {
             } else {
                 1.0
             };
-        let rays = r.width as u64 * r.height as u64 * (r.aa as u64).pow(2);
         // Not in the steps view, which shows the march as it is without
         // them (as it does without closed forms).
         let reach_of = |tape: &isoray_shape::Tape| {
-            domain
-                .filter(|_| r.view != View::Steps)
-                .map(|(c, h)| reach::Reach::new(tape, &scene.inputs, c, h, above, rays))
+            let rays = rays.filter(|_| r.view != View::Steps)?;
+            domain.map(|(c, h)| reach::Reach::new(tape, &scene.inputs, c, h, above, rays))
         };
         let scene_reach = reach_of(scene.shape.tape());
         let rest_reach = scene.derived().rest.as_ref().and_then(|r| reach_of(r.tape()));
