@@ -1060,11 +1060,7 @@ impl<'s> Worker<'s> {
             // beyond that still count, below).
             let mut reach_t = tmax.clone();
             if closed {
-                let eps = if s.shadow_epsilon > 0.0 {
-                    s.shadow_epsilon
-                } else {
-                    s.hit_epsilon
-                } as f32;
+                let eps = trace::shadow_epsilon(s);
                 // The opaque ones (transparent objects transmit, below).
                 let analytic: Vec<&isoray_scene::analytic::Analytic> = (scene.derived().analytic.iter())
                     .zip(&ctx.surfaces)

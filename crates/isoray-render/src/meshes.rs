@@ -23,11 +23,7 @@ pub fn closest_hits(meshes: &[MeshObject], rays: &Rays) -> Vec<Option<MeshHit>> 
         return Vec::new();
     }
     (0..rays.len())
-        .map(|i| {
-            let o = [rays.ox[i], rays.oy[i], rays.oz[i]];
-            let d = [rays.dx[i], rays.dy[i], rays.dz[i]];
-            closest(meshes, o, d, f32::INFINITY)
-        })
+        .map(|i| closest(meshes, rays.origin(i), rays.direction(i), f32::INFINITY))
         .collect()
 }
 
@@ -65,8 +61,7 @@ pub fn occlude(meshes: &[MeshObject], rays: &Rays, tmax: &[f32], vis: &mut [f32]
         if *v <= 0.0 {
             continue;
         }
-        let o = [rays.ox[i], rays.oy[i], rays.oz[i]];
-        let d = [rays.dx[i], rays.dy[i], rays.dz[i]];
+        let (o, d) = (rays.origin(i), rays.direction(i));
         if meshes.iter().any(|m| {
             let (lo, ld) = m.to_local(o, d);
             m.bvh().any(lo, ld, 0.0, tmax[i])

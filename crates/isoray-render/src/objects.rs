@@ -28,6 +28,7 @@
 use isoray_shade::material::{blend_weight, smooth_min};
 use isoray_shade::MaterialSample;
 use isoray_shape::interval::{Interval, IntervalEvaluator};
+use isoray_shape::ir::UnOp;
 use isoray_shape::Tape;
 
 use crate::trace::Field;
@@ -185,7 +186,7 @@ impl<'s> Objects<'s> {
         for &j in candidates {
             let mut iv = self.bounds[j as usize].eval(self.tapes[j as usize], bx, None);
             if fold.unsigned {
-                iv = abs(iv);
+                iv = Interval::unary(UnOp::Abs, iv);
             }
             if !kept.is_empty() {
                 let after = below(best.hi, iv.lo) && (k == 0.0 || below(acc.hi + width, iv.lo));
@@ -267,17 +268,6 @@ impl<'s> Objects<'s> {
             obj[i as usize] = self.obj[q] as usize;
         }
         (n * kept.len()) as u64
-    }
-}
-
-/// |x| over an interval.
-fn abs(i: Interval) -> Interval {
-    if i.lo >= 0.0 {
-        i
-    } else if i.hi <= 0.0 {
-        Interval::new(-i.hi, -i.lo)
-    } else {
-        Interval::new(0.0, i.hi.max(-i.lo))
     }
 }
 

@@ -284,6 +284,16 @@ pub fn sphere_trace_capped(
     evals
 }
 
+/// The distance below which a shadow ray meets an occluder:
+/// `shadow_epsilon`, or `hit_epsilon` when that is 0.
+pub fn shadow_epsilon(s: &RenderSettings) -> f32 {
+    (if s.shadow_epsilon > 0.0 {
+        s.shadow_epsilon
+    } else {
+        s.hit_epsilon
+    }) as f32
+}
+
 /// Marches shadow rays from surface points towards lights and returns the
 /// visibility (0 = shadowed, 1 = lit) of each. `size` is the light's penumbra
 /// size and `tmax` the distance to the light (per ray). Returns evaluations.
@@ -304,11 +314,7 @@ pub fn shadow_march(
     if mode == ShadowMode::None || n == 0 {
         return 0;
     }
-    let eps = if s.shadow_epsilon > 0.0 {
-        s.shadow_epsilon
-    } else {
-        s.hit_epsilon
-    } as f32;
+    let eps = shadow_epsilon(s);
     let start = s.shadow_start as f32;
     let min_step = (0.5 * start).max(eps);
     let mut t = vec![start; n];

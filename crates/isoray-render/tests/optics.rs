@@ -585,25 +585,22 @@ fn checker_materials_alternate_by_cell() {
     assert!(e.message.contains("no material named \"blak\""), "{e}");
 }
 
-#[test]
-fn closed_form_planes_and_spheres_give_the_marched_depths() {
-    // Spheres and the plane are intersected in closed form by default; the
-    // depth must be what marching finds (within the hit epsilon).
-    let text = r#"
-[camera]
-position = [0.0, 2.0, 6.0]
-target = [0.0, 0.5, 0.0]
-[render]
-width = 48
-height = 32
-[[light]]
-[[object]]
+/// A plane and a sphere (closed forms) and a torus (marched).
+const PLANE_SPHERE_TORUS: &str = r#"[[object]]
 shape = "plane(p, vec3(0.0, 1.0, 0.0), 0.0)"
 [[object]]
 shape = "sphere(p - vec3(-1.0, 0.8, 0.0), 0.8)"
 [[object]]
 shape = "torus(p - vec3(1.2, 0.4, 0.0), 0.7, 0.3)"
 "#;
+
+#[test]
+fn closed_form_planes_and_spheres_give_the_marched_depths() {
+    // Spheres and the plane are intersected in closed form by default; the
+    // depth must be what marching finds (within the hit epsilon).
+    let text = &format!(
+        "[camera]\nposition = [0.0, 2.0, 6.0]\ntarget = [0.0, 0.5, 0.0]\n[render]\nwidth = 48\nheight = 32\n[[light]]\n{PLANE_SPHERE_TORUS}"
+    );
     let aovs = RenderOptions {
         aovs: true,
         ..RenderOptions::default()
@@ -685,15 +682,10 @@ position = [-3.0, 5.0, 3.0]
 [material.glass]
 transparency = 0.9
 ior = 1.4
-[[object]]
-shape = "plane(p, vec3(0.0, 1.0, 0.0), 0.0)"
-[[object]]
-shape = "sphere(p - vec3(-1.0, 0.8, 0.0), 0.8)"
-[[object]]
-shape = "torus(p - vec3(1.2, 0.4, 0.0), 0.7, 0.3)"
 "#;
+    let base = format!("{base}{PLANE_SPHERE_TORUS}");
     let glass = format!("{base}[[object]]\nmaterial = \"glass\"\nshape = \"sphere(p - vec3(0.3, 1.6, 1.0), 0.4)\"\n");
-    for text in [base.to_string(), glass] {
+    for text in [base.clone(), glass] {
         let closed = load_str(&text, "a.toml", &[]).unwrap();
         assert!(closed.derived().rest.is_some());
         let marched = load_str(&text, "a.toml", &["render.analytic=false".to_string()]).unwrap();

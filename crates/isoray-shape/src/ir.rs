@@ -785,13 +785,7 @@ enum Emit {
     Node(usize),
 }
 
-/// The operands of an operation.
-fn operands_of(op: &Op) -> Vec<Node> {
-    let (ops, n) = operand_array(op);
-    ops[..n].to_vec()
-}
-
-/// The operands of an operation without allocating: the first n of the array.
+/// The operands of an operation, without allocating: the first n of the array.
 fn operand_array(op: &Op) -> ([Node; 3], usize) {
     let z = Node(0);
     match *op {
@@ -835,7 +829,8 @@ fn emit_scope(ops: &[Op], is_lazy: &dyn Fn(usize) -> bool, scope: &[usize], top:
             continue;
         }
         let i = scope[j];
-        for (slot, m) in operands_of(&ops[i]).into_iter().enumerate() {
+        let (operands, n) = operand_array(&ops[i]);
+        for (slot, &m) in operands[..n].iter().enumerate() {
             if is_lazy(i) && slot == 2 {
                 continue;
             }
@@ -858,7 +853,8 @@ fn emit_scope(ops: &[Op], is_lazy: &dyn Fn(usize) -> bool, scope: &[usize], top:
                 continue;
             }
             region[q] = if region[q] == OUTSIDE { rj } else { SHARED };
-            stack.extend(operands_of(&ops[scope[q]]));
+            let (operands, n) = operand_array(&ops[scope[q]]);
+            stack.extend_from_slice(&operands[..n]);
         }
     }
     // A shared node is computed always; everything below it that is not
