@@ -532,6 +532,12 @@ struct Ctx<'s> {
     rest_reach: Option<reach::Reach>,
     /// The same for what hard shadow rays march beside closed forms.
     shadow_reach: Option<reach::Reach>,
+    /// The same for the transparent objects shadow rays pass through.
+    clear_reach: Option<reach::Reach>,
+    /// When every transparent object is a plane or a sphere in closed
+    /// form: those objects (index and form), which shadow rays then
+    /// intersect instead of marching.
+    clear_closed: Option<Vec<(usize, isoray_scene::analytic::Analytic)>>,
 }
 
 impl<'s> Ctx<'s> {
@@ -551,7 +557,7 @@ impl<'s> Ctx<'s> {
             .map(|o| o.material)
             .chain(scene.meshes.iter().map(|m| m.material))
             .collect();
-        let surfaces = material_of
+        let surfaces: Vec<MaterialSample> = material_of
             .iter()
             .map(|&m| MaterialSample::from(&scene.materials[m]))
             .collect();
@@ -578,6 +584,18 @@ impl<'s> Ctx<'s> {
             Some(sh) => sh.opaque_rest.as_ref().and_then(|r| reach_of(r.tape())),
             None => rest_reach,
         };
+        let clear_reach = match &scene.derived().shadow {
+            Some(sh) if scene.render.shadows != ShadowMode::None => reach_of(sh.transparent.tape()),
+            _ => None,
+        };
+        let clear_closed = scene.derived().shadow.as_ref().and_then(|_| {
+            let analytic = &scene.derived().analytic;
+            let forms: Option<Vec<_>> = (0..scene.objects.len())
+                .filter(|&k| surfaces[k].transparency > 0.0)
+                .map(|k| analytic.get(k).copied().flatten().map(|a| (k, a)))
+                .collect();
+            forms.filter(|f| !f.is_empty())
+        });
         Ctx {
             scene,
             cam,
@@ -585,6 +603,8 @@ impl<'s> Ctx<'s> {
             scene_reach,
             rest_reach,
             shadow_reach,
+            clear_reach,
+            clear_closed,
             surfaces,
             material_of,
             material_surfaces,

@@ -15,7 +15,7 @@ use isoray_shade::lights::hash;
 use isoray_shade::optics::{beer_lambert, interface, reflect};
 use isoray_shade::{to_vec3, MaterialSample};
 
-use crate::trace::{sphere_trace, Hit, Rays};
+use crate::trace::{sphere_trace_capped, Hit, Rays};
 use crate::{Ctx, HitSet, Worker};
 
 /// The fields shadow rays trace when some object is transparent.
@@ -88,6 +88,55 @@ impl Packet {
 /// Secondary rays start this many hit epsilons off the surface, on the side
 /// they travel into, so they do not find their own surface again.
 const OFFSET: f32 = 10.0;
+
+/// [`Worker::transmission`] when every transparent object is a plane or
+/// a sphere (`closed`): each ray's crossings of their surfaces before
+/// `tmax`, in order, toggle the objects it is inside, and each stretch
+/// inside absorbs over its exact length (a grazing ray's short chord
+/// included).
+fn transmission_closed(
+    ctx: &Ctx,
+    closed: &[(usize, isoray_scene::analytic::Analytic)],
+    o: &[Vec3],
+    l: &[Vec3],
+    tmax: &[f32],
+    start: &[Media],
+) -> Vec<Vec3> {
+    let mut crossings: Vec<(f32, usize)> = Vec::new();
+    let absorb = |media: &Media, length: f32| match media.top() {
+        Some(top) => beer_lambert(ctx.surfaces[top].absorption, length),
+        None => Vec3::ONE,
+    };
+    (0..o.len())
+        .map(|r| {
+            crossings.clear();
+            for &(obj, a) in closed {
+                for t in a.intersect(o[r].to_array(), l[r].to_array()) {
+                    if t > 0.0 && t < tmax[r] {
+                        crossings.push((t, obj));
+                    }
+                }
+            }
+            crossings.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let (mut out, mut media, mut at) = (Vec3::ONE, start[r], 0.0);
+            for &(t, obj) in &crossings {
+                out *= absorb(&media, t - at);
+                if media.contains(obj) {
+                    media.remove(obj);
+                } else {
+                    out *= ctx.surfaces[obj].interface_transmittance();
+                    media.push(obj);
+                }
+                at = t;
+                if out.max_element() <= 1e-4 {
+                    return out;
+                }
+            }
+            // Inside up to the light: absorb the rest.
+            out * absorb(&media, (tmax[r] - at).min(1e4))
+        })
+        .collect()
+}
 
 impl Worker<'_> {
     /// Shades the primary hits `hs` of `self.rays` and follows reflected and
@@ -233,6 +282,9 @@ impl Worker<'_> {
         tmax: &[f32],
         start: &[Media],
     ) -> (Vec<Vec3>, u64) {
+        if let Some(closed) = &ctx.clear_closed {
+            return (transmission_closed(ctx, closed, o, l, tmax, start), 0);
+        }
         let s = &ctx.scene.render;
         let off = OFFSET * s.hit_epsilon as f32;
         let n = o.len();
@@ -242,7 +294,6 @@ impl Worker<'_> {
         let mut media = start.to_vec();
         let mut active: Vec<usize> = (0..n).collect();
         let mut evals = 0;
-        let mut hits: Vec<Hit> = Vec::new();
         let clear_of = |obj: usize| ctx.surfaces[obj].interface_transmittance();
         for _ in 0..MAX_SHADOW_SEGMENTS {
             if active.is_empty() {
@@ -258,30 +309,17 @@ impl Worker<'_> {
                 if group.is_empty() {
                     continue;
                 }
-                let mut rays = Rays::default();
-                for &i in &group {
-                    rays.push(origin[i].to_array(), l[i].to_array());
-                }
-                let Some(se) = self.shadow_evals.as_mut() else { break };
-                let ev = if inside { &mut se.clear_surfaces } else { &mut se.clear };
-                evals += sphere_trace(ev, &rays, s, &mut self.scratch, &mut hits);
-                // The transparent object at each hit: nearest surface among them.
-                let pts: Vec<(usize, Vec3, f32)> = group
-                    .iter()
-                    .zip(&hits)
-                    .filter(|(&i, h)| h.t < left[i])
-                    .map(|(&i, h)| (i, origin[i] + l[i] * h.t, h.t))
-                    .collect();
-                for (r, &i) in group.iter().enumerate() {
-                    if hits[r].t >= left[i] {
+                let Some(found) = self.next_interfaces(ctx, inside, &group, &origin, l, &left, &mut evals) else {
+                    break;
+                };
+                for (&i, hit) in group.iter().zip(found) {
+                    let Some((t, obj)) = hit else {
                         // No further interface before the light (inside: absorb the rest).
                         if let Some(top) = media[i].top() {
                             out[i] *= beer_lambert(ctx.surfaces[top].absorption, left[i].min(1e4));
                         }
-                    }
-                }
-                let objs = self.nearest_objects(ctx, &pts, &mut evals);
-                for ((i, p, t), obj) in pts.into_iter().zip(objs) {
+                        continue;
+                    };
                     if let Some(top) = media[i].top() {
                         // The segment began `off` before the traced origin (the step past the interface).
                         out[i] *= beer_lambert(ctx.surfaces[top].absorption, t + off);
@@ -292,7 +330,7 @@ impl Worker<'_> {
                         out[i] *= clear_of(obj);
                         media[i].push(obj);
                     }
-                    origin[i] = p + l[i] * off;
+                    origin[i] = (origin[i] + l[i] * t) + l[i] * off;
                     left[i] -= t + off;
                     if out[i].max_element() > 1e-4 && left[i] > 0.0 {
                         still.push(i);
@@ -304,6 +342,62 @@ impl Worker<'_> {
         // Rays still crossing interfaces after the last segment (grazing a
         // surface, in and out within the offset) keep what they have.
         (out, evals)
+    }
+
+    /// The next transparent interface along each ray `group[r]` (from
+    /// `origin[i]` along `l[i]`, before `left[i]`): its distance and
+    /// object, None where there is none. Marched: outside objects the
+    /// union of the transparent ones, no further than the box their
+    /// surface lies in; inside, the distance to the nearest transparent
+    /// surface; the object is the one whose surface is nearest the hit.
+    /// None when there are no shadow fields.
+    #[allow(clippy::too_many_arguments)]
+    fn next_interfaces(
+        &mut self,
+        ctx: &Ctx,
+        inside: bool,
+        group: &[usize],
+        origin: &[Vec3],
+        l: &[Vec3],
+        left: &[f32],
+        evals: &mut u64,
+    ) -> Option<Vec<Option<(f32, usize)>>> {
+        let s = &ctx.scene.render;
+        let mut rays = Rays::default();
+        for &i in group {
+            rays.push(origin[i].to_array(), l[i].to_array());
+        }
+        // No interface counts beyond the light: marching stops there (and,
+        // outside the objects, once the ray leaves the box their surface
+        // lies in).
+        let far: Vec<f32> = group
+            .iter()
+            .enumerate()
+            .map(|(r, &i)| match (&ctx.clear_reach, inside) {
+                (Some(reach), false) => left[i].min(reach.far(rays.origin(r), rays.direction(r), left[i])),
+                _ => left[i],
+            })
+            .collect();
+        let se = self.shadow_evals.as_mut()?;
+        let ev = if inside { &mut se.clear_surfaces } else { &mut se.clear };
+        let mut hits: Vec<Hit> = Vec::new();
+        *evals += sphere_trace_capped(ev, &rays, s, &mut self.scratch, &mut hits, None, Some(&far));
+        let pts: Vec<(usize, Vec3, f32)> = group
+            .iter()
+            .zip(&hits)
+            .filter(|(&i, h)| h.t < left[i])
+            .map(|(&i, h)| (i, origin[i] + l[i] * h.t, h.t))
+            .collect();
+        let objs = self.nearest_objects(ctx, &pts, evals);
+        let mut found = vec![None; group.len()];
+        let mut k = 0;
+        for (r, &i) in group.iter().enumerate() {
+            if hits[r].t < left[i] {
+                found[r] = Some((pts[k].2, objs[k]));
+                k += 1;
+            }
+        }
+        Some(found)
     }
 
     /// The object whose surface is nearest each point (|d| smallest).

@@ -266,6 +266,29 @@ material = "floor"
 shape = "box(p - vec3(1.5, 2.0, 0.0), vec3(0.6, 0.1, 0.6))"
 "#;
 
+/// The colour of the pixel whose ray meets the floor (y = 0) nearest (x, 0, z),
+/// and where that ray meets it.
+fn floor_pixel(scene: &isoray_scene::Scene, color: &[[f32; 3]], x: f64, z: f64) -> ([f32; 3], DVec3) {
+    let (w, h) = (scene.render.width, scene.render.height);
+    let cam = RayCamera::new(&scene.camera, w, h);
+    let mut best = (f64::INFINITY, 0usize, DVec3::ZERO);
+    for j in 0..h {
+        for i in 0..w {
+            let d = cam.direction(i as f64 + 0.5, j as f64 + 0.5);
+            let t = -cam.origin().y / d.y;
+            if t <= 0.0 {
+                continue;
+            }
+            let q = cam.origin() + d * t;
+            let e = (q.x - x).hypot(q.z - z);
+            if e < best.0 {
+                best = (e, (j * w + i) as usize, q);
+            }
+        }
+    }
+    (color[best.1], best.2)
+}
+
 #[test]
 fn shadows_through_glass_are_attenuated_not_blocked() {
     // Light straight down. Under the glass slab (0.5 thick, absorption 1 in
@@ -274,23 +297,7 @@ fn shadows_through_glass_are_attenuated_not_blocked() {
     // low down, under the slabs.
     let scene = load_str(SLAB, "slab.toml", &[]).unwrap();
     let (img, _) = render(&scene, &RenderOptions::default());
-    let cam = RayCamera::new(&scene.camera, 48, 48);
-    let floor_pixel = |x: f64, z: f64| -> [f32; 3] {
-        // The pixel whose ray meets the floor nearest (x, 0, z).
-        let mut best = (f64::INFINITY, 0usize);
-        for j in 0..48u32 {
-            for i in 0..48u32 {
-                let d = cam.direction(i as f64 + 0.5, j as f64 + 0.5);
-                let t = -cam.origin().y / d.y;
-                let q = cam.origin() + d * t;
-                let e = (q.x - x).hypot(q.z - z);
-                if e < best.0 {
-                    best = (e, (j * 48 + i) as usize);
-                }
-            }
-        }
-        img.color[best.1]
-    };
+    let floor_pixel = |x: f64, z: f64| floor_pixel(&scene, &img.color, x, z).0;
     let lit = floor_pixel(0.0, 1.8);
     let under_opaque = floor_pixel(1.5, 0.0);
     assert!(lit[0] > 0.5 && (lit[0] - lit[1]).abs() < 1e-3, "{lit:?}");
@@ -304,6 +311,53 @@ fn shadows_through_glass_are_attenuated_not_blocked() {
         "red ratio {red}, want exp(-0.5) = {}",
         (-0.5f32).exp()
     );
+}
+
+/// A glass ball (radius 1, absorption 1 in red, no Fresnel, index 1) over
+/// a floor, lit straight down: the floor at distance b from the point under
+/// its centre keeps exp(−2·√(1 − b²)) of its red light (the chord), all of
+/// its green. Closed-form shadow rays (the ball is a sphere: its two
+/// crossings) and marched ones (`render.analytic = false`) alike.
+#[test]
+fn shadows_through_a_glass_ball_keep_the_chord_s_share() {
+    let end = SLAB.find("[[object]]").unwrap();
+    let text = SLAB[..end]
+        .replace("width = 48\nheight = 48", "width = 200\nheight = 120")
+        .replace("position = [0.0, 0.8, 6.0]", "position = [0.0, 0.9, 3.0]")
+        + "[[object]]\nmaterial = \"floor\"\nshape = \"plane(p, vec3(0.0, 1.0, 0.0), 0.0)\"\n"
+        + "[[object]]\nmaterial = \"glass\"\nshape = \"sphere(p - vec3(0.0, 2.0, 0.0), 1.0)\"\n";
+    for overrides in [vec![], vec!["render.analytic=false".to_string()]] {
+        let scene = load_str(&text, "ball.toml", &overrides).unwrap();
+        let (img, _) = render(&scene, &RenderOptions::default());
+        let (lit, _) = floor_pixel(&scene, &img.color, 1.6, 0.0);
+        assert!(lit[0] > 0.5 && (lit[0] - lit[1]).abs() < 1e-3, "{overrides:?}: {lit:?}");
+        // Every pixel of the floor under the ball (its shadow's rim too).
+        let cam = RayCamera::new(&scene.camera, 200, 120);
+        let mut seen = 0;
+        for j in 0..120u32 {
+            for i in 0..200u32 {
+                let d = cam.direction(i as f64 + 0.5, j as f64 + 0.5);
+                let q = cam.origin() - d * (cam.origin().y / d.y);
+                let b = q.x.hypot(q.z);
+                if d.y >= 0.0 || b >= 0.97 {
+                    continue;
+                }
+                let under = img.color[(j * 200 + i) as usize];
+                let want = (-2.0 * (1.0 - b * b).sqrt()).exp() as f32;
+                let (red, green) = (under[0] / lit[0], under[1] / lit[1]);
+                assert!(
+                    (green - 1.0).abs() < 0.03,
+                    "{overrides:?} b = {b}: {under:?} vs {lit:?}"
+                );
+                assert!(
+                    (red - want).abs() < 0.03,
+                    "{overrides:?} b = {b}: red ratio {red}, want {want}"
+                );
+                seen += 1;
+            }
+        }
+        assert!(seen > 500, "{seen} pixels under the ball");
+    }
 }
 
 fn penumbra_scene(radius: f64) -> String {

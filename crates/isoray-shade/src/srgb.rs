@@ -13,13 +13,93 @@ pub fn linear_to_srgb(x: f32) -> f32 {
 }
 
 /// One linear value as an 8-bit sRGB code: ⌊255·[`linear_to_srgb`]`(x)` + ½⌋.
+///
+/// Looked up, not computed: the code is the number of codes whose least
+/// linear value ([`Codes`]) is at most `x`, found from a bucket of the
+/// unit interval in a step or two. The same byte as the formula for every
+/// `x` (the formula is monotonic; the tests compare both around every
+/// code's threshold), five to ten times faster than its `powf`, which
+/// matters for the serial tail of a render: a 1280×720 image is 2.8 million
+/// conversions.
 pub fn srgb8(x: f32) -> u8 {
+    Codes::get().code(x)
+}
+
+/// The formula [`srgb8`] looks up.
+fn srgb8_formula(x: f32) -> u8 {
     (linear_to_srgb(x) * 255.0 + 0.5) as u8
+}
+
+/// Buckets of the unit interval the lookup starts from.
+const BUCKETS: usize = 4096;
+
+/// The least linear value of each 8-bit code, and the code of each
+/// bucket's start.
+struct Codes {
+    /// `start[k]`: the least x with code k + 1 (k < 255).
+    start: [f32; 255],
+    /// The code of the least value of each bucket [i/B, (i+1)/B).
+    bucket: [u8; BUCKETS],
+}
+
+impl Codes {
+    fn get() -> &'static Codes {
+        static CODES: std::sync::OnceLock<Codes> = std::sync::OnceLock::new();
+        CODES.get_or_init(Codes::new)
+    }
+
+    fn new() -> Codes {
+        // Bisection over the bit patterns of [0, 1] (ordered as the values).
+        let start = std::array::from_fn(|k| {
+            let want = k as u8 + 1;
+            let (mut lo, mut hi) = (0u32, 1.0f32.to_bits());
+            while lo < hi {
+                let mid = lo + (hi - lo) / 2;
+                if srgb8_formula(f32::from_bits(mid)) >= want {
+                    hi = mid;
+                } else {
+                    lo = mid + 1;
+                }
+            }
+            f32::from_bits(lo)
+        });
+        let mut codes = Codes {
+            start,
+            bucket: [0; BUCKETS],
+        };
+        for i in 0..BUCKETS {
+            codes.bucket[i] = codes.count_from(0, i as f32 / BUCKETS as f32);
+        }
+        codes
+    }
+
+    /// The code of `x`, counting thresholds up from code `from` (at most
+    /// the code of x).
+    fn count_from(&self, from: u8, x: f32) -> u8 {
+        let mut c = from;
+        while c < 255 && self.start[c as usize] <= x {
+            c += 1;
+        }
+        c
+    }
+
+    fn code(&self, x: f32) -> u8 {
+        if x.is_nan() || x <= 0.0 {
+            return srgb8_formula(x.max(0.0));
+        }
+        if x >= 1.0 {
+            return 255;
+        }
+        // x·B is exact (B is a power of two): bucket i starts at i/B ≤ x.
+        let i = ((x * BUCKETS as f32) as usize).min(BUCKETS - 1);
+        self.count_from(self.bucket[i], x)
+    }
 }
 
 /// Linear RGB pixels to 8-bit sRGB bytes, three per pixel ([`srgb8`]).
 pub fn to_srgb8(rgb: &[[f32; 3]]) -> Vec<u8> {
-    rgb.iter().flat_map(|c| c.map(srgb8)).collect()
+    let codes = Codes::get();
+    rgb.iter().flat_map(|c| c.map(|x| codes.code(x))).collect()
 }
 
 #[cfg(test)]
@@ -37,6 +117,46 @@ mod tests {
         assert_eq!(linear_to_srgb(-1.0), 0.0);
         assert_eq!(linear_to_srgb(2.0), linear_to_srgb(1.0));
         assert_eq!(srgb8(f32::INFINITY), 255);
+    }
+
+    /// The lookup gives the formula's byte around every code's threshold
+    /// (a few thousand values either side), at the bucket edges and at
+    /// values spread over [−1, 2], NaN and infinities included.
+    #[test]
+    fn lookup_equals_the_formula() {
+        let codes = Codes::get();
+        for (k, &t) in codes.start.iter().enumerate() {
+            assert_eq!(srgb8_formula(t), k as u8 + 1, "threshold of code {}", k + 1);
+            let b = t.to_bits();
+            for bits in b.saturating_sub(3000)..b + 3000 {
+                let x = f32::from_bits(bits);
+                assert_eq!(srgb8(x), srgb8_formula(x), "at {x:e}");
+            }
+        }
+        for i in 0..=BUCKETS {
+            let x = i as f32 / BUCKETS as f32;
+            for y in [
+                x,
+                f32::from_bits(x.to_bits().saturating_sub(1)),
+                f32::from_bits(x.to_bits() + 1),
+            ] {
+                assert_eq!(srgb8(y), srgb8_formula(y), "at {y:e}");
+            }
+        }
+        for i in 0..300_000 {
+            let x = -1.0 + 3.0 * i as f32 / 300_000.0;
+            assert_eq!(srgb8(x), srgb8_formula(x), "at {x:e}");
+        }
+        for x in [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            -0.0,
+            f32::MIN_POSITIVE,
+            1e-30,
+        ] {
+            assert_eq!(srgb8(x), srgb8_formula(x), "at {x:e}");
+        }
     }
 
     #[test]
