@@ -103,18 +103,28 @@ impl VoxelView {
     /// The world point of voxel coordinates (x, y, z) (continuous: voxel k
     /// spans [k, k + 1)), in fidget's convention.
     pub fn screen_to_world(&self, s: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|axis| self.screen_to_world_axis(axis, s[axis]))
+    }
+
+    /// One world coordinate (`axis` 0, 1, 2: x, y, z) of a voxel coordinate
+    /// along it ([`Self::screen_to_world`] axis by axis).
+    pub fn screen_to_world_axis(&self, axis: usize, s: f64) -> f64 {
         let min = self.width.min(self.height).min(self.depth) as f64;
         let k = 2.0 / min;
-        [
-            (s[0] - self.width as f64 / 2.0) * k,
-            -(s[1] - (self.height as f64 / 2.0 - 1.0)) * k,
-            (s[2] - self.depth as f64 / 2.0) * k,
-        ]
+        match axis {
+            0 => (s - self.width as f64 / 2.0) * k,
+            1 => -(s - (self.height as f64 / 2.0 - 1.0)) * k,
+            _ => (s - self.depth as f64 / 2.0) * k,
+        }
     }
 
     /// The model point of voxel coordinates (x, y, z).
     pub fn screen_to_model(&self, s: [f64; 3]) -> [f64; 3] {
-        let w = self.screen_to_world(s);
+        self.world_to_model_point(self.screen_to_world(s))
+    }
+
+    /// The model point of world point `w`.
+    pub fn world_to_model_point(&self, w: [f64; 3]) -> [f64; 3] {
         let m = &self.world_to_model;
         std::array::from_fn(|i| m[i][0] * w[0] + m[i][1] * w[1] + m[i][2] * w[2] + m[i][3])
     }
@@ -378,16 +388,24 @@ impl<'a> TileRender<'a> {
     /// depth of each column from its nearest filled voxel.
     fn leaf(&mut self, tape: &Tape, i: u32, j: u32, z: u32, size: u32) {
         let n = (size * size * size) as usize;
-        debug_assert!(n <= LANES);
+        debug_assert!(n <= LANES && size <= LEAF);
+        // The voxel centers in model space: m·w + t summed as
+        // `world_to_model_point` sums it, ((m₀·w₀ + m₁·w₁) + m₂·w₂) + t, from
+        // the products of each axis's four world coordinates (the same
+        // numbers, without a product per voxel).
+        let base = [self.x0 + i, self.y0 + j, z];
+        let m = &self.view.world_to_model;
+        let term: [[[f64; 3]; LEAF as usize]; 3] = std::array::from_fn(|a| {
+            std::array::from_fn(|d| {
+                let w = self.view.screen_to_world_axis(a, (base[a] + d as u32) as f64 + 0.5);
+                std::array::from_fn(|r| m[r][a] * w)
+            })
+        });
         let mut k = 0;
-        for dz in 0..size {
-            for dj in 0..size {
-                for di in 0..size {
-                    let p = self.view.screen_to_model([
-                        (self.x0 + i + di) as f64 + 0.5,
-                        (self.y0 + j + dj) as f64 + 0.5,
-                        (z + dz) as f64 + 0.5,
-                    ]);
+        for tz in &term[2][..size as usize] {
+            for ty in &term[1][..size as usize] {
+                for tx in &term[0][..size as usize] {
+                    let p: [f64; 3] = std::array::from_fn(|r| ((tx[r] + ty[r]) + tz[r]) + m[r][3]);
                     self.xs[k] = p[0];
                     self.ys[k] = p[1];
                     self.zs[k] = p[2];
