@@ -34,6 +34,7 @@ pub mod meshes;
 mod objects;
 pub mod output;
 mod prune;
+mod queue;
 pub mod reach;
 pub mod sequence;
 pub mod tiles;
@@ -393,14 +394,13 @@ fn render_into(
     // One worker per thread, taking the next tile as it finishes one: a
     // worker's pruned fields (their octrees of simplified tapes) then serve
     // every tile its thread renders.
-    let next = AtomicU64::new(0);
     let slots: Vec<std::sync::Mutex<Option<TileOut>>> = tiles.iter().map(|_| std::sync::Mutex::new(None)).collect();
     let threads = rayon::current_num_threads().min(tiles.len()).max(1);
-    (0..threads).into_par_iter().for_each(|_| {
+    let queue = queue::TileQueue::new(tiles.len(), threads);
+    (0..threads).into_par_iter().for_each(|worker| {
         let mut wk = Worker::new(&ctx);
-        loop {
-            let k = next.fetch_add(1, Ordering::Relaxed) as usize;
-            let Some(&(x0, y0)) = tiles.get(k) else { break };
+        while let Some(k) = queue.take(worker) {
+            let (x0, y0) = tiles[k];
             if opts.cancel.as_ref().is_some_and(|c| c.is_cancelled()) {
                 break;
             }
