@@ -509,6 +509,29 @@ fn blocks(a: &isoray_scene::analytic::Analytic, o: [f32; 3], d: [f32; 3], start:
     a.intersect(o, d).iter().any(|&t| t >= start && t < tmax)
 }
 
+/// The distance to the occluders beyond which no shadow ray marched
+/// without closed forms can be darkened, whatever its light: a hard shadow
+/// ray meets an occluder only nearer than the shadow epsilon, and the soft
+/// and improved estimates take the least d / (size · t) over the march,
+/// capped at 1, which d ≥ size · `shadow_max_distance` ≥ size · t never
+/// lowers. None without shadows, or with Aaltonen's estimate (which a
+/// large d does not bound).
+fn penumbra(scene: &Scene) -> Option<f64> {
+    let s = &scene.render;
+    let mut d: Option<f64> = None;
+    for light in &scene.lights {
+        let area = lights::sample_count(light) > 1 || lights::is_area(light);
+        let reach = match (s.shadows, area) {
+            (ShadowMode::None, _) => continue,
+            (_, true) | (ShadowMode::Hard, false) => trace::shadow_epsilon(s) as f64,
+            (ShadowMode::Soft | ShadowMode::Improved, false) => light.size * s.shadow_max_distance,
+            (ShadowMode::Aaltonen, false) => return None,
+        };
+        d = Some(d.map_or(reach, |d: f64| d.max(reach)));
+    }
+    d
+}
+
 /// Read-only render context shared by all workers.
 struct Ctx<'s> {
     scene: &'s Scene,
@@ -534,6 +557,10 @@ struct Ctx<'s> {
     shadow_reach: Option<reach::Reach>,
     /// The same for the transparent objects shadow rays pass through.
     clear_reach: Option<reach::Reach>,
+    /// Where the field shadow rays march without closed forms is below
+    /// [`penumbra`]: past it they stop (nothing there changes their
+    /// visibility).
+    penumbra_reach: Option<reach::Reach>,
     /// When every transparent object is a plane or a sphere in closed
     /// form: those objects (index and form), which shadow rays then
     /// intersect instead of marching.
@@ -574,19 +601,32 @@ impl<'s> Ctx<'s> {
             };
         // Not in the steps view, which shows the march as it is without
         // them (as it does without closed forms).
-        let reach_of = |tape: &isoray_shape::Tape| {
+        let reach_above = |tape: &isoray_shape::Tape, above: f64| {
             let rays = rays.filter(|_| r.view != View::Steps)?;
             domain.map(|(c, h)| reach::Reach::new(tape, &scene.inputs, c, h, above, rays))
         };
-        let scene_reach = reach_of(scene.shape.tape());
-        let rest_reach = scene.derived().rest.as_ref().and_then(|r| reach_of(r.tape()));
-        let shadow_reach = match &scene.derived().shadow {
-            Some(sh) => sh.opaque_rest.as_ref().and_then(|r| reach_of(r.tape())),
-            None => rest_reach,
-        };
-        let clear_reach = match &scene.derived().shadow {
-            Some(sh) if scene.render.shadows != ShadowMode::None => reach_of(sh.transparent.tape()),
-            _ => None,
+        // The fields' reaches, computed side by side (each is a search of
+        // its own over interval bounds, done before any tile starts).
+        let shadow = scene.derived().shadow.as_ref();
+        let wanted: [Option<(&isoray_shape::Tape, f64)>; 5] = [
+            Some((scene.shape.tape(), above)),
+            scene.derived().rest.as_ref().map(|r| (r.tape(), above)),
+            shadow.and_then(|sh| sh.opaque_rest.as_ref()).map(|r| (r.tape(), above)),
+            shadow
+                .filter(|_| scene.render.shadows != ShadowMode::None)
+                .map(|sh| (sh.transparent.tape(), above)),
+            penumbra(scene).map(|d| (shadow.map_or(scene.shape.tape(), |sh| sh.opaque.tape()), d)),
+        ];
+        let reaches: Vec<Option<reach::Reach>> = wanted
+            .par_iter()
+            .map(|w| w.and_then(|(tape, above)| reach_above(tape, above)))
+            .collect();
+        let [scene_reach, rest_reach, opaque_rest_reach, clear_reach, penumbra_reach] =
+            std::array::from_fn(|k| reaches[k]);
+        let shadow_reach = if shadow.is_some() {
+            opaque_rest_reach
+        } else {
+            rest_reach
         };
         let clear_closed = scene.derived().shadow.as_ref().and_then(|_| {
             let analytic = &scene.derived().analytic;
@@ -604,6 +644,7 @@ impl<'s> Ctx<'s> {
             rest_reach,
             shadow_reach,
             clear_reach,
+            penumbra_reach,
             clear_closed,
             surfaces,
             material_of,
@@ -1098,6 +1139,12 @@ impl<'s> Worker<'s> {
                     } else if let Some(reach) = &ctx.shadow_reach {
                         reach_t[r] = tmax[r].min(reach.far(o, d, tmax[r]));
                     }
+                }
+            } else if let Some(reach) = &ctx.penumbra_reach {
+                // Past the box where occluders are nearer than the
+                // penumbra distance, nothing changes the ray's visibility.
+                for (r, t) in reach_t.iter_mut().enumerate() {
+                    *t = t.min(reach.far(shadow_rays.origin(r), shadow_rays.direction(r), *t));
                 }
             }
             // With transparent objects, opaque ones occlude (with the penumbra

@@ -482,20 +482,27 @@ mod tests {
         assert!(run * 10 < whole * 7, "{run} instructions run, {whole} unpruned");
     }
 
-    /// A render with `render.prune` on is byte for byte the render with it off.
+    /// A render with `render.prune` on is byte for byte the render with it
+    /// off: tapes simplified per region, rays stopped past the surface's
+    /// reach, and shadow rays past the penumbra's (soft, improved and hard
+    /// shadows).
     #[test]
     fn pruning_leaves_the_image_unchanged() {
         let text = spheres(60, (48, 32));
-        let on = isoray_scene::load_str(&text, "spheres.toml", &[]).unwrap();
-        let off = isoray_scene::load_str(&text, "spheres.toml", &["render.prune=false".into()]).unwrap();
         let opts = crate::RenderOptions {
             aovs: true,
             ..Default::default()
         };
-        let (a, _) = crate::render(&on, &opts);
-        let (b, _) = crate::render(&off, &opts);
-        assert_eq!(a, b);
-        let hit = a.depth.as_ref().unwrap().iter().filter(|d| d.is_finite()).count();
-        assert!(hit > 100, "only {hit} pixels hit");
+        for shadows in ["soft", "improved", "hard"] {
+            let mode = format!("render.shadows=\"{shadows}\"");
+            let on = isoray_scene::load_str(&text, "spheres.toml", std::slice::from_ref(&mode)).unwrap();
+            let off = isoray_scene::load_str(&text, "spheres.toml", &[mode, "render.prune=false".into()]).unwrap();
+            assert!(super::super::penumbra(&on).is_some());
+            let (a, _) = crate::render(&on, &opts);
+            let (b, _) = crate::render(&off, &opts);
+            assert!(a == b, "{shadows} shadows: pruned and unpruned images differ");
+            let hit = a.depth.as_ref().unwrap().iter().filter(|d| d.is_finite()).count();
+            assert!(hit > 100, "only {hit} pixels hit");
+        }
     }
 }

@@ -235,9 +235,24 @@ pub fn sphere_trace_capped(
     }
     scratch.last.clear();
     scratch.last.resize(n, f32::NAN);
+    // Rays from one point (a camera's primary rays) take their first step
+    // from one distance: evaluated once, the same number for each.
+    let shared_start = scratch.active.split_first().and_then(|(&first, rest)| {
+        let o = rays.origin(first as usize);
+        rest.iter().all(|&i| rays.origin(i as usize) == o).then_some(o)
+    });
     let mut step = 0;
     while !scratch.active.is_empty() {
-        evals += scratch.eval_active(eval, rays, |i| hits[i].t);
+        match shared_start.filter(|_| step == 0) {
+            Some(o) => {
+                let mut d = [0.0f32];
+                eval.eval(&[o[0]], &[o[1]], &[o[2]], &mut d);
+                scratch.ds.clear();
+                scratch.ds.resize(scratch.active.len(), d[0]);
+                evals += 1;
+            }
+            None => evals += scratch.eval_active(eval, rays, |i| hits[i].t),
+        }
         step += 1;
         scratch.next.clear();
         for (k, &i) in scratch.active.iter().enumerate() {
