@@ -67,8 +67,10 @@ impl Codes {
             start,
             bucket: [0; BUCKETS],
         };
+        let mut code = 0;
         for i in 0..BUCKETS {
-            codes.bucket[i] = codes.count_from(0, i as f32 / BUCKETS as f32);
+            code = codes.count_from(code, i as f32 / BUCKETS as f32);
+            codes.bucket[i] = code;
         }
         codes
     }
