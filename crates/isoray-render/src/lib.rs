@@ -391,9 +391,9 @@ fn render_into(
     let ctx = Ctx::new(scene, cam, rays);
     let done = AtomicU64::new(0);
     let total = tiles.len() as u64;
-    // One worker per thread, taking the next tile as it finishes one: a
-    // worker's pruned fields (their octrees of simplified tapes) then serve
-    // every tile its thread renders.
+    // One worker per thread, taking its band of tiles and then helping the
+    // others (`queue`): a worker's pruned fields (their octrees of
+    // simplified tapes) serve every tile its thread renders.
     let slots: Vec<std::sync::Mutex<Option<TileOut>>> = tiles.iter().map(|_| std::sync::Mutex::new(None)).collect();
     let threads = rayon::current_num_threads().min(tiles.len()).max(1);
     let queue = queue::TileQueue::new(tiles.len(), threads);
@@ -608,6 +608,10 @@ impl<'s> Ctx<'s> {
         // The fields' reaches, computed side by side (each is a search of
         // its own over interval bounds, done before any tile starts).
         let shadow = scene.derived().shadow.as_ref();
+        // The penumbra's box is the surface's when it bounds the same field
+        // at a distance no greater.
+        let penumbra_d = penumbra(scene);
+        let penumbra_is_surface = shadow.is_none() && penumbra_d.is_some_and(|d| d <= above);
         let wanted: [Option<(&isoray_shape::Tape, f64)>; 5] = [
             Some((scene.shape.tape(), above)),
             scene.derived().rest.as_ref().map(|r| (r.tape(), above)),
@@ -615,7 +619,9 @@ impl<'s> Ctx<'s> {
             shadow
                 .filter(|_| scene.render.shadows != ShadowMode::None)
                 .map(|sh| (sh.transparent.tape(), above)),
-            penumbra(scene).map(|d| (shadow.map_or(scene.shape.tape(), |sh| sh.opaque.tape()), d)),
+            penumbra_d
+                .filter(|_| !penumbra_is_surface)
+                .map(|d| (shadow.map_or(scene.shape.tape(), |sh| sh.opaque.tape()), d)),
         ];
         let reaches: Vec<Option<reach::Reach>> = wanted
             .par_iter()
@@ -623,6 +629,11 @@ impl<'s> Ctx<'s> {
             .collect();
         let [scene_reach, rest_reach, opaque_rest_reach, clear_reach, penumbra_reach] =
             std::array::from_fn(|k| reaches[k]);
+        let penumbra_reach = if penumbra_is_surface {
+            scene_reach
+        } else {
+            penumbra_reach
+        };
         let shadow_reach = if shadow.is_some() {
             opaque_rest_reach
         } else {
