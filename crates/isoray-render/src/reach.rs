@@ -108,6 +108,23 @@ struct Search<'t> {
     max_depth: u8,
     /// Interval instructions left to run.
     budget: i64,
+    /// Whether a search stopped at its cap (its answer a looser bound).
+    capped: bool,
+}
+
+impl Search<'_> {
+    /// The box from the six searches, each spending at most `cap`.
+    fn six(&mut self, cap: i64) -> Option<Aabb> {
+        let mut b = Aabb {
+            lo: [0.0; 3],
+            hi: [0.0; 3],
+        };
+        for k in 0..3 {
+            b.hi[k] = self.extreme(k, 1.0, cap)?;
+            b.lo[k] = -self.extreme(k, -1.0, cap)?;
+        }
+        Some(b)
+    }
 }
 
 impl Search<'_> {
@@ -175,14 +192,18 @@ impl Search<'_> {
     }
 
     /// The greatest s·x_axis over the cells at the finest level that may
-    /// hold surface (s = ±1); None when no cell may.
-    fn extreme(&mut self, axis: usize, s: f64) -> Option<f64> {
+    /// hold surface (s = ±1); None when no cell may. Spends at most `cap`
+    /// of the budget; past that (or the budget), the furthest cell not
+    /// ruled out, and `self.capped` is set.
+    fn extreme(&mut self, axis: usize, s: f64, cap: i64) -> Option<f64> {
         let entry = |c: &Cell, i: u32| Entry(s * c.c[axis] + c.h, c.depth, i);
+        let stop = self.budget.saturating_sub(cap).max(0);
         let mut queue = BinaryHeap::new();
         queue.push(entry(&self.cells[0], 0));
         while let Some(Entry(r, depth, i)) = queue.pop() {
-            if self.budget <= 0 {
+            if self.budget <= stop {
                 // Nothing queued reaches further than this cell.
+                self.capped = true;
                 return Some(r);
             }
             if !self.maybe(i) {
@@ -205,6 +226,14 @@ impl Search<'_> {
 /// no point of the cube is. The searches run at most `budget` interval
 /// instructions in all: past that, each answers with the furthest cell it
 /// has not ruled out, a looser box but still a true one.
+///
+/// They run in two rounds. In the first each face gets 1/48 of the budget;
+/// when one runs short and the box is still more than half the cube (the
+/// bounds are too loose to rule out much of it, as for a twisted box or
+/// a plane), that box is the answer and the rest of the budget is not
+/// spent. Otherwise the six searches go on in turn with what is left; the
+/// cells the first round bounded are not bounded again, so the answer is
+/// the one a single round with the whole budget gives.
 pub fn surface_box(
     tape: &Tape,
     vars: &[f64],
@@ -232,16 +261,17 @@ pub fn surface_box(
         above,
         max_depth,
         budget,
+        capped: false,
     };
-    let mut b = Aabb {
-        lo: [0.0; 3],
-        hi: [0.0; 3],
-    };
-    for k in 0..3 {
-        b.hi[k] = search.extreme(k, 1.0)?;
-        b.lo[k] = -search.extreme(k, -1.0)?;
+    let first = search.six(budget / 48)?;
+    if !search.capped {
+        return Some(first);
     }
-    Some(b)
+    let volume = |b: &Aabb| (0..3).map(|k| (b.hi[k] - b.lo[k]).max(0.0)).product::<f64>();
+    if volume(&first) > 0.5 * (2.0 * half).powi(3) {
+        return Some(first);
+    }
+    search.six(i64::MAX)
 }
 
 /// What rays can reach of a field's surface inside a domain cube (every
@@ -321,6 +351,32 @@ mod tests {
         }
         // Nothing below -1 anywhere: no box.
         assert!(surface_box(sh.tape(), &[], [0.0; 3], 16.0, -1.0, 9, 1 << 20).is_none());
+    }
+
+    /// A field whose interval bounds rule out little (a twist: sines of
+    /// wide ranges) still gets a true box: every sampled point where it is
+    /// below the threshold lies inside, whichever round answered.
+    #[test]
+    fn loose_bounds_still_give_a_true_box() {
+        let lib = Library::new();
+        let src = "box(vec3(p.x * cos(2.0 * p.y) - p.z * sin(2.0 * p.y), p.y, p.x * sin(2.0 * p.y) + p.z * cos(2.0 * p.y)) - vec3(3.0, 1.0, -2.0), vec3(0.6, 1.5, 0.3))";
+        let sh = compile(&lib, src).unwrap();
+        let mut eval = isoray_shape::PointEvaluator::<f64>::new(sh.tape());
+        for budget in [1 << 12, 1 << 16, 1 << 20] {
+            let b = surface_box(sh.tape(), &[], [0.0; 3], 16.0, 1e-3, 9, budget).unwrap();
+            let mut inside = 0;
+            for i in 0..40_000u32 {
+                let f = |k: u32| {
+                    ((i.wrapping_mul(2654435761).wrapping_add(k * 40503) % 10_000) as f64 / 10_000.0) * 12.0 - 6.0
+                };
+                let p = [f(1), f(2), f(3)];
+                if eval.eval(&[], p[0], p[1], p[2]) <= 1e-3 {
+                    inside += 1;
+                    assert!(b.contains(p), "budget {budget}: {p:?} outside {b:?}");
+                }
+            }
+            assert!(inside > 100, "{inside} points sampled inside");
+        }
     }
 
     #[test]
