@@ -565,6 +565,10 @@ struct Ctx<'s> {
     /// form: those objects (index and form), which shadow rays then
     /// intersect instead of marching.
     clear_closed: Option<Vec<(usize, isoray_scene::analytic::Analytic)>>,
+    /// The planes and spheres in closed form that block hard shadow rays:
+    /// the opaque ones when shadow rays trace transparent objects apart,
+    /// else all.
+    opaque_closed: Vec<isoray_scene::analytic::Analytic>,
 }
 
 impl<'s> Ctx<'s> {
@@ -639,7 +643,12 @@ impl<'s> Ctx<'s> {
         } else {
             rest_reach
         };
-        let clear_closed = scene.derived().shadow.as_ref().and_then(|_| {
+        let opaque_closed = (scene.derived().analytic.iter())
+            .zip(&surfaces)
+            .filter(|(_, sf)| shadow.is_none() || sf.transparency <= 0.0)
+            .filter_map(|(a, _)| *a)
+            .collect();
+        let clear_closed = shadow.and_then(|_| {
             let analytic = &scene.derived().analytic;
             let forms: Option<Vec<_>> = (0..scene.objects.len())
                 .filter(|&k| surfaces[k].transparency > 0.0)
@@ -657,6 +666,7 @@ impl<'s> Ctx<'s> {
             clear_reach,
             penumbra_reach,
             clear_closed,
+            opaque_closed,
             surfaces,
             material_of,
             material_surfaces,
@@ -1133,17 +1143,9 @@ impl<'s> Worker<'s> {
             let mut reach_t = tmax.clone();
             if closed {
                 let eps = trace::shadow_epsilon(s);
-                // The opaque ones (transparent objects transmit, below).
-                let analytic: Vec<&isoray_scene::analytic::Analytic> = (scene.derived().analytic.iter())
-                    .zip(&ctx.surfaces)
-                    .filter(|(_, sf)| self.shadow_evals.is_none() || sf.transparency <= 0.0)
-                    .filter_map(|(a, _)| a.as_ref())
-                    .collect();
                 for r in 0..shadow_rays.len() {
                     let (o, d) = (shadow_rays.origin(r), shadow_rays.direction(r));
-                    let hit = analytic
-                        .iter()
-                        .any(|a| blocks(a, o, d, s.shadow_start as f32, tmax[r], eps));
+                    let hit = (ctx.opaque_closed.iter()).any(|a| blocks(a, o, d, s.shadow_start as f32, tmax[r], eps));
                     blocked.push(hit);
                     if hit {
                         reach_t[r] = -1.0; // not marched

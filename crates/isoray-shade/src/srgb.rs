@@ -86,8 +86,9 @@ impl Codes {
     }
 
     fn code(&self, x: f32) -> u8 {
+        // Zero, negatives and NaN encode as 0 (the formula clamps them).
         if x.is_nan() || x <= 0.0 {
-            return srgb8_formula(x.max(0.0));
+            return 0;
         }
         if x >= 1.0 {
             return 255;
