@@ -605,9 +605,28 @@ impl<'s> Ctx<'s> {
             };
         // Not in the steps view, which shows the march as it is without
         // them (as it does without closed forms).
+        // When every object is a sphere, the scene's reach (and the
+        // penumbra's, of the same field) is a union of balls' boxes.
+        let spheres: Option<Vec<([f64; 3], f64)>> = (domain.is_some() && scene.objects.len() > 1)
+            .then(|| {
+                scene
+                    .objects
+                    .par_iter()
+                    .map(|o| match o.closed_form(&scene.inputs) {
+                        Some(isoray_scene::analytic::Analytic::Sphere { c, r }) => Some((c, r)),
+                        _ => None,
+                    })
+                    .collect()
+            })
+            .flatten();
         let reach_above = |tape: &isoray_shape::Tape, above: f64| {
             let rays = rays.filter(|_| r.view != View::Steps)?;
-            domain.map(|(c, h)| reach::Reach::new(tape, &scene.inputs, c, h, above, rays))
+            let (c, h) = domain?;
+            let closed = spheres
+                .as_ref()
+                .filter(|_| std::ptr::eq(tape, scene.shape.tape()))
+                .and_then(|s| reach::Reach::of_spheres(s, r.blend, c, h, above));
+            Some(closed.unwrap_or_else(|| reach::Reach::new(tape, &scene.inputs, c, h, above, rays)))
         };
         // The fields' reaches, computed side by side (each is a search of
         // its own over interval bounds, done before any tile starts).

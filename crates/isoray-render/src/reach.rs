@@ -304,6 +304,52 @@ impl Reach {
         }
     }
 
+    /// The reach of a union of spheres (centre, radius), or of their smooth
+    /// union of width `k` folded in any order, inside the cube of
+    /// half-size `half` around `center`: where the field is `above` or
+    /// less, in closed form.
+    ///
+    /// A fold of quadratic smooth unions is never below the least of its
+    /// operands minus k: su(a, b) ≥ min(a, b) − k/4, and once the fold is
+    /// x below an operand m, adding any b ≥ m leaves it at least
+    /// m − x − (k − x)²/(4k) ≥ m − k for 0 ≤ x ≤ k. So the surface lies in
+    /// the union of the balls of radius r + `above` + k, whose box this is
+    /// (padded for the f32 evaluation of the field). None when a centre
+    /// or radius is not finite.
+    pub fn of_spheres(spheres: &[([f64; 3], f64)], k: f64, center: [f64; 3], half: f64, above: f64) -> Option<Reach> {
+        let domain = Aabb {
+            lo: center.map(|c| c - half),
+            hi: center.map(|c| c + half),
+        };
+        let mut b: Option<Aabb> = None;
+        for &(c, r) in spheres {
+            if !(r.is_finite() && c.iter().all(|x| x.is_finite())) {
+                return None;
+            }
+            let size = c.iter().fold(r.abs() + above.abs() + k.abs(), |m, x| m.max(x.abs()));
+            let reach = r + above + k.max(0.0) + 1e-4 * (1.0 + size);
+            if reach < 0.0 {
+                continue;
+            }
+            let lo = c.map(|x| x - reach);
+            let hi = c.map(|x| x + reach);
+            b = Some(match b {
+                None => Aabb { lo, hi },
+                Some(b) => Aabb {
+                    lo: std::array::from_fn(|i| b.lo[i].min(lo[i])),
+                    hi: std::array::from_fn(|i| b.hi[i].max(hi[i])),
+                },
+            });
+        }
+        // Within the domain, as the searches' boxes are.
+        let surface = b.and_then(|b| {
+            let lo: [f64; 3] = std::array::from_fn(|i| b.lo[i].max(domain.lo[i]));
+            let hi: [f64; 3] = std::array::from_fn(|i| b.hi[i].min(domain.hi[i]));
+            (0..3).all(|i| lo[i] <= hi[i]).then_some(Aabb { lo, hi })
+        });
+        Some(Reach { domain, surface })
+    }
+
     /// The box of the surface; None when the domain holds none.
     pub fn surface(&self) -> Option<Aabb> {
         self.surface
@@ -351,6 +397,58 @@ mod tests {
         }
         // Nothing below -1 anywhere: no box.
         assert!(surface_box(sh.tape(), &[], [0.0; 3], 16.0, -1.0, 9, 1 << 20).is_none());
+    }
+
+    /// A smooth union of spheres, some of them stacked on one centre (the
+    /// blends compound there, down to min − k), never reaches below the
+    /// threshold outside the closed-form box, and the box is the union of
+    /// the balls grown by no more than k.
+    #[test]
+    fn sphere_folds_lie_in_their_balls_box() {
+        let lib = Library::new();
+        let mut seed = 11u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % 1_000_000) as f64 / 1_000_000.0
+        };
+        let k = 0.5;
+        let mut spheres: Vec<([f64; 3], f64)> = (0..12)
+            .map(|_| (std::array::from_fn(|_| rnd() * 4.0 - 2.0), 0.1 + 0.3 * rnd()))
+            .collect();
+        for _ in 0..6 {
+            spheres.push(([1.5, -1.5, 1.5], 0.2));
+        }
+        let one = |(c, r): &([f64; 3], f64)| format!("sphere(p - vec3({:.6}, {:.6}, {:.6}), {r:.6})", c[0], c[1], c[2]);
+        let src = spheres[1..].iter().fold(one(&spheres[0]), |acc, s| {
+            format!("smooth_union({acc}, {}, {k})", one(s))
+        });
+        let sh = compile(&lib, &src).unwrap();
+        let above = 1e-3;
+        let reach = Reach::of_spheres(&spheres, k, [0.0; 3], 8.0, above).unwrap();
+        let b = reach.surface().unwrap();
+        let mut eval = isoray_shape::PointEvaluator::<f32>::new(sh.tape());
+        let mut inside = 0;
+        for _ in 0..200_000 {
+            let p: [f64; 3] = std::array::from_fn(|_| rnd() * 6.0 - 3.0);
+            if eval.eval(&[], p[0] as f32, p[1] as f32, p[2] as f32) as f64 <= above {
+                inside += 1;
+                assert!(b.contains(p), "{p:?} outside {b:?}");
+            }
+        }
+        assert!(inside > 1000, "{inside} points sampled inside");
+        // At most k (and the padding) beyond the balls themselves.
+        for i in 0..3 {
+            let lo = spheres.iter().map(|(c, r)| c[i] - r).fold(f64::INFINITY, f64::min);
+            let hi = spheres.iter().map(|(c, r)| c[i] + r).fold(f64::NEG_INFINITY, f64::max);
+            assert!(b.lo[i] >= lo - k - 0.01 && b.hi[i] <= hi + k + 0.01, "{b:?}");
+        }
+        // The fold's own bound: min − k at the stacked centre's rim.
+        let q = [1.5f32 + 0.2, -1.5, 1.5];
+        let v = eval.eval(&[], q[0], q[1], q[2]);
+        let v = v as f64;
+        assert!(v < -0.2 * k && v >= -k - 1e-6, "{v}");
     }
 
     /// A field whose interval bounds rule out little (a twist: sines of

@@ -16,7 +16,14 @@
 //! it reads changed, so moving a slider costs nothing but the new points.
 //! A tape that reads no input ignores `vars` (pass `&[]`).
 
+use std::collections::HashMap;
+
 use crate::ir::{apply_binary, apply_unary, BinOp, InputCache, Instr, Tape, UnOp};
+use crate::program::{Compiler, Program, Slots};
+
+/// Compiled tapes a [`BatchEvaluator`] keeps at most; past this its cache
+/// starts again.
+const MAX_PROGRAMS: usize = 1 << 16;
 
 /// Number of points a [`BatchEvaluator`] processes per pass over the tape.
 pub const LANES: usize = 64;
@@ -354,7 +361,16 @@ impl BatchNum for f64 {}
 #[derive(Debug, Clone)]
 pub struct BatchEvaluator<'t, T: BatchNum> {
     tape: &'t Tape,
-    slots: Vec<T>,
+    /// Per slot of the tape, its value when it does not depend on the
+    /// point (constants and the prologue's values).
+    values: Vec<T>,
+    /// What the compiler knows of the tape's slots.
+    slot_info: Slots<T>,
+    /// The tape and its rewrites compiled, by [`Tape::id`].
+    programs: HashMap<u64, Program<T>>,
+    compiler: Compiler,
+    /// The programs' registers, [`LANES`] values each.
+    regs: Vec<T>,
     inputs: InputCache,
     /// Scratch for gradient stencils.
     scratch: [Vec<T>; 4],
@@ -365,9 +381,17 @@ pub struct BatchEvaluator<'t, T: BatchNum> {
 impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
     /// An evaluator for `tape`; allocates its working memory once.
     pub fn new(tape: &'t Tape) -> Self {
+        let mut values = vec![T::from_f64(0.0); tape.slots()];
+        for &(s, v) in tape.constants() {
+            values[s as usize] = T::from_f64(v);
+        }
         BatchEvaluator {
             tape,
-            slots: block_slots(tape),
+            values,
+            slot_info: Slots::of(tape),
+            programs: HashMap::new(),
+            compiler: Compiler::default(),
+            regs: Vec::new(),
             inputs: InputCache::default(),
             scratch: Default::default(),
             dual: None,
@@ -381,7 +405,13 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
 
     /// Runs the prologue when the inputs changed since the last call.
     fn bind(&mut self, vars: &[f64]) {
-        bind_blocks(self.tape, &mut self.inputs, &mut self.slots, vars);
+        if self.inputs.changed(self.tape, vars) {
+            let mut scratch = std::mem::take(&mut self.inputs.scratch);
+            for (slot, v) in self.tape.prologue().run(vars, &mut scratch) {
+                self.values[slot] = T::from_f64(v);
+            }
+            self.inputs.scratch = scratch;
+        }
     }
 
     /// Evaluates at the points (xs[i], ys[i], zs[i]) with the inputs `vars`
@@ -393,7 +423,7 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
             "slices of different lengths"
         );
         let tape = self.tape;
-        self.eval_instrs(tape.instrs(), tape.output(), vars, xs, ys, zs, out);
+        self.eval_instrs(tape, vars, xs, ys, zs, out);
     }
 
     /// Evaluates `variant`, a rewrite of this evaluator's tape with the same
@@ -407,38 +437,44 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
             variant.same_frame(self.tape),
             "a variant must keep its tape's slots and constants"
         );
-        self.eval_instrs(variant.instrs(), variant.output(), vars, xs, ys, zs, out);
+        self.eval_instrs(variant, vars, xs, ys, zs, out);
     }
 
-    /// Runs `instrs` (writing their result to slot `output`) over the points.
-    #[allow(clippy::too_many_arguments)]
-    fn eval_instrs(
-        &mut self,
-        instrs: &[Instr],
-        output: usize,
-        vars: &[f64],
-        xs: &[T],
-        ys: &[T],
-        zs: &[T],
-        out: &mut [T],
-    ) {
+    /// Runs `tape` (this evaluator's tape or a rewrite of it) over the
+    /// points, compiled ([`Program`]) the first time.
+    fn eval_instrs(&mut self, tape: &Tape, vars: &[f64], xs: &[T], ys: &[T], zs: &[T], out: &mut [T]) {
         self.bind(vars);
+        if self.programs.len() >= MAX_PROGRAMS {
+            self.programs.clear();
+        }
+        let compiler = &mut self.compiler;
+        let info = &self.slot_info;
+        let prog = self
+            .programs
+            .entry(tape.id())
+            .or_insert_with(|| compiler.compile(tape, info));
+        if self.regs.len() < prog.regs * LANES {
+            self.regs.resize(prog.regs * LANES, T::from_f64(0.0));
+        }
         let n = xs.len().min(ys.len()).min(zs.len()).min(out.len());
+        let regs = &mut self.regs;
         let mut i = 0;
         while i < n {
             let m = (n - i).min(LANES);
-            self.slots[..m].copy_from_slice(&xs[i..i + m]);
-            self.slots[LANES..LANES + m].copy_from_slice(&ys[i..i + m]);
-            self.slots[2 * LANES..2 * LANES + m].copy_from_slice(&zs[i..i + m]);
-            self.run(instrs, m);
-            let o = output * LANES;
-            out[i..i + m].copy_from_slice(&self.slots[o..o + m]);
+            regs[..m].copy_from_slice(&xs[i..i + m]);
+            regs[LANES..LANES + m].copy_from_slice(&ys[i..i + m]);
+            regs[2 * LANES..2 * LANES + m].copy_from_slice(&zs[i..i + m]);
+            // The lanes the program computes (whole groups of 8).
+            let w = (m.div_ceil(8) * 8).min(LANES);
+            for &(s, r) in &prog.loads {
+                let r = r as usize * LANES;
+                regs[r..r + w].fill(self.values[s as usize]);
+            }
+            prog.run(regs, m);
+            let o = prog.output as usize * LANES;
+            out[i..i + m].copy_from_slice(&regs[o..o + m]);
             i += m;
         }
-    }
-
-    fn run(&mut self, instrs: &[Instr], m: usize) {
-        run_blocks(&mut self.slots, instrs, m);
     }
 
     /// Gradients at the points by finite differences (or dual numbers) into

@@ -5,6 +5,8 @@
 //! absorb rounding). Used for guaranteed distance bounds (Lipschitz bounds
 //! over a ball) and for skipping empty space.
 
+use std::collections::HashMap;
+
 use crate::ir::{BinOp, Instr, Tape, UnOp};
 
 /// A closed interval [lo, hi]; `lo > hi` never occurs. Infinite ends are allowed.
@@ -21,6 +23,7 @@ const WHOLE: Interval = Interval {
     hi: f64::INFINITY,
 };
 
+#[inline(always)]
 fn down(x: f64) -> f64 {
     if x.is_finite() {
         x - (x.abs() * 4.0 * f64::EPSILON + f64::MIN_POSITIVE)
@@ -29,6 +32,7 @@ fn down(x: f64) -> f64 {
     }
 }
 
+#[inline(always)]
 fn up(x: f64) -> f64 {
     if x.is_finite() {
         x + (x.abs() * 4.0 * f64::EPSILON + f64::MIN_POSITIVE)
@@ -39,6 +43,7 @@ fn up(x: f64) -> f64 {
 
 impl Interval {
     /// [lo, hi] (swapped if given in the wrong order; NaN gives the whole line).
+    #[inline(always)]
     pub fn new(lo: f64, hi: f64) -> Interval {
         if lo.is_nan() || hi.is_nan() {
             return WHOLE;
@@ -60,6 +65,7 @@ impl Interval {
     pub fn width(&self) -> f64 {
         self.hi - self.lo
     }
+    #[inline(always)]
     fn widen(lo: f64, hi: f64) -> Interval {
         Interval::new(down(lo), up(hi))
     }
@@ -71,18 +77,11 @@ impl Interval {
     }
 
     /// A unary operation.
+    #[inline(always)]
     pub fn unary(op: UnOp, a: Interval) -> Interval {
         match op {
             UnOp::Neg => Interval::new(-a.hi, -a.lo),
-            UnOp::Abs => {
-                if a.lo >= 0.0 {
-                    a
-                } else if a.hi <= 0.0 {
-                    Interval::new(-a.hi, -a.lo)
-                } else {
-                    Interval::new(0.0, (-a.lo).max(a.hi))
-                }
-            }
+            UnOp::Abs => a.abs(),
             UnOp::Sqrt => {
                 if a.hi < 0.0 {
                     return Interval::point(f64::NAN).nan_to_whole();
@@ -90,7 +89,7 @@ impl Interval {
                 Interval::widen(a.lo.max(0.0).sqrt(), a.hi.sqrt()).clamp_lo(0.0)
             }
             UnOp::Square => {
-                let m = Interval::unary(UnOp::Abs, a);
+                let m = a.abs();
                 Interval::widen(m.lo * m.lo, m.hi * m.hi).clamp_lo(0.0)
             }
             UnOp::Sin => trig(a, f64::sin, std::f64::consts::FRAC_PI_2),
@@ -130,6 +129,7 @@ impl Interval {
     }
 
     /// A binary operation.
+    #[inline(always)]
     pub fn binary(op: BinOp, a: Interval, b: Interval) -> Interval {
         match op {
             BinOp::Add => Interval::widen(a.lo + b.lo, a.hi + b.hi),
@@ -168,7 +168,7 @@ impl Interval {
                     if n == 0 {
                         return Interval::point(1.0);
                     }
-                    let base = if n % 2 == 0 { Interval::unary(UnOp::Abs, a) } else { a };
+                    let base = if n % 2 == 0 { a.abs() } else { a };
                     // Decreasing for n < 0: order the ends before widening
                     // them. powf, as the reference: powi's repeated squaring
                     // is off by up to |n| ulps.
@@ -181,8 +181,8 @@ impl Interval {
                 }
                 if a.lo > 0.0 {
                     // a^b = exp(b ln a).
-                    let l = Interval::unary(UnOp::Ln, a);
-                    return Interval::unary(UnOp::Exp, Interval::binary(BinOp::Mul, b, l));
+                    let l = unary_call(UnOp::Ln, a);
+                    return unary_call(UnOp::Exp, binary_call(BinOp::Mul, b, l));
                 }
                 WHOLE
             }
@@ -190,6 +190,18 @@ impl Interval {
         }
     }
 
+    #[inline(always)]
+    fn abs(self) -> Interval {
+        if self.lo >= 0.0 {
+            self
+        } else if self.hi <= 0.0 {
+            Interval::new(-self.hi, -self.lo)
+        } else {
+            Interval::new(0.0, (-self.lo).max(self.hi))
+        }
+    }
+
+    #[inline(always)]
     fn clamp_lo(self, lo: f64) -> Interval {
         Interval::new(self.lo.max(lo), self.hi.max(lo))
     }
@@ -280,10 +292,48 @@ pub fn eval_interval_choices(
 pub struct IntervalEvaluator<'t> {
     tape: &'t Tape,
     slots: Vec<Interval>,
+    /// Scratch for finding smooth minimums.
     blends: Blends,
+    /// The smooth minimums of each tape evaluated so far, by [`Tape::id`]
+    /// (a renderer evaluates each of its simplified tapes over up to eight
+    /// boxes, its cells' children, at different times).
+    tables: HashMap<u64, BlendTable>,
+    /// The operands' bounds of each smooth minimum of the tape being
+    /// evaluated, saved at its `min` for its last instruction.
+    args: Vec<(Interval, Interval)>,
     /// Whether the tape has a smooth minimum (its rewrites, which only drop
     /// and forward instructions, are not searched when it has none).
     any_blends: bool,
+}
+
+/// Tables kept at most; past this the cache starts again.
+const MAX_TABLES: usize = 1 << 16;
+
+/// The smooth minimums of one tape: the positions of their `min`
+/// instructions, ascending, and of their last instructions, ascending,
+/// each with its `min`'s number in the first list and its k.
+#[derive(Debug, Clone, Default)]
+struct BlendTable {
+    mins: Vec<u32>,
+    ends: Vec<(u32, u32, f64)>,
+}
+
+impl BlendTable {
+    fn of(blends: &Blends) -> BlendTable {
+        let mut mins: Vec<u32> = (0..blends.role.len() as u32)
+            .filter(|&i| blends.role[i as usize] == 1)
+            .collect();
+        mins.sort_unstable();
+        let ends = (0..blends.role.len() as u32)
+            .filter(|&i| blends.role[i as usize] == 2)
+            .map(|i| {
+                let (m, k) = blends.ends[i as usize];
+                let at = mins.binary_search(&m).expect("every end has its min") as u32;
+                (i, at, k)
+            })
+            .collect();
+        BlendTable { mins, ends }
+    }
 }
 
 /// The smooth minimums of a tape, found by their instructions, which
@@ -296,18 +346,14 @@ pub struct IntervalEvaluator<'t> {
 /// instructions' bound with that.
 #[derive(Debug, Clone, Default)]
 struct Blends {
-    /// The tape they were found in ([`Tape::id`]; 0: none yet).
-    tape: u64,
     /// Per slot: the instruction that last wrote it, or [`UNWRITTEN`].
     defs: Vec<u32>,
     /// Per instruction: the writers of its operands a and b.
     ops: Vec<[u32; 2]>,
-    /// Per instruction: 0; 1 for the `min` of a smooth minimum (its
-    /// operands' bounds are kept in `args`); 2 for its last instruction
-    /// (`ends` says which `min` and which k).
+    /// Per instruction: 0; 1 for the `min` of a smooth minimum; 2 for
+    /// its last instruction (`ends` says which `min` and which k).
     role: Vec<u8>,
     ends: Vec<(u32, f64)>,
-    args: Vec<(Interval, Interval)>,
 }
 
 /// A slot no instruction writes (an input, constant or prologue value).
@@ -331,9 +377,6 @@ impl Blends {
         self.role.resize(n, 0);
         self.ends.clear();
         self.ends.resize(n, (0, 0.0));
-        if self.args.len() < n {
-            self.args.resize(n, (WHOLE, WHOLE));
-        }
         for (i, ins) in instrs.iter().enumerate() {
             let (out, a, b) = match *ins {
                 Instr::Unary { out, a, .. } => (out, a, a),
@@ -419,12 +462,16 @@ impl<'t> IntervalEvaluator<'t> {
         }
         let mut blends = Blends::default();
         blends.find(tape.instrs(), &s);
-        blends.tape = tape.id();
-        let any_blends = blends.role.contains(&2);
+        let table = BlendTable::of(&blends);
+        let any_blends = !table.ends.is_empty();
+        let mut tables = HashMap::new();
+        tables.insert(tape.id(), table);
         IntervalEvaluator {
             tape,
             slots: s,
             blends,
+            tables,
+            args: Vec::new(),
             any_blends,
         }
     }
@@ -441,46 +488,88 @@ impl<'t> IntervalEvaluator<'t> {
             variant.same_frame(self.tape),
             "a variant must keep its tape's slots and constants"
         );
-        let any_blends = self.any_blends;
-        if any_blends && self.blends.tape != variant.id() {
-            self.blends.find(variant.instrs(), &self.slots);
-            self.blends.tape = variant.id();
+        let instrs = variant.instrs();
+        if self.any_blends && !self.tables.contains_key(&variant.id()) {
+            if self.tables.len() >= MAX_TABLES {
+                self.tables.clear();
+            }
+            self.blends.find(instrs, &self.slots);
+            self.tables.insert(variant.id(), BlendTable::of(&self.blends));
         }
-        let blends = &mut self.blends;
+        const EMPTY: &BlendTable = &BlendTable {
+            mins: Vec::new(),
+            ends: Vec::new(),
+        };
+        let table = match self.any_blends {
+            true => self.tables.get(&variant.id()).unwrap_or(EMPTY),
+            false => EMPTY,
+        };
+        let args = &mut self.args;
+        args.clear();
+        args.resize(table.mins.len(), (WHOLE, WHOLE));
+        let (mut mi, mut ei) = (0usize, 0usize);
+        let at = |v: Option<u32>| v.map_or(usize::MAX, |i| i as usize);
+        let mut next_min = at(table.mins.first().copied());
+        let mut next_end = at(table.ends.first().map(|e| e.0));
         let s = &mut self.slots;
         s[..3].copy_from_slice(&xyz);
         if let Some(c) = choices.as_deref_mut() {
             c.clear();
+            c.resize(instrs.len(), Choice::Both);
         }
-        for (i, ins) in variant.instrs().iter().enumerate() {
-            let mut choice = Choice::Both;
+        for (i, ins) in instrs.iter().enumerate() {
             match *ins {
                 // Lazy regions are evaluated: their select takes the hull where c may be ≤ 0.
                 Instr::Skip { .. } => {}
-                Instr::Unary { op, out, a } => s[out as usize] = Interval::unary(op, s[a as usize]),
+                Instr::Unary { op, out, a } => {
+                    let ia = s[a as usize];
+                    s[out as usize] = match op {
+                        UnOp::Neg => Interval::unary(UnOp::Neg, ia),
+                        UnOp::Abs => Interval::unary(UnOp::Abs, ia),
+                        UnOp::Sqrt => Interval::unary(UnOp::Sqrt, ia),
+                        UnOp::Square => Interval::unary(UnOp::Square, ia),
+                        op => unary_call(op, ia),
+                    }
+                }
                 Instr::Binary { op, out, a, b } => {
                     let (ia, ib) = (s[a as usize], s[b as usize]);
-                    choice = match op {
+                    let choice = match op {
                         BinOp::Min if separated(ia.hi, ib.lo) => Choice::Left,
                         BinOp::Min if separated(ib.hi, ia.lo) => Choice::Right,
                         BinOp::Max if separated(ib.hi, ia.lo) => Choice::Left,
                         BinOp::Max if separated(ia.hi, ib.lo) => Choice::Right,
                         _ => Choice::Both,
                     };
-                    let mut r = Interval::binary(op, ia, ib);
-                    match if any_blends { blends.role[i] } else { 0 } {
-                        1 => blends.args[i] = (ia, ib),
-                        2 => {
-                            let (m, k) = blends.ends[i];
-                            let (a, b) = blends.args[m as usize];
-                            r = tighter(r, a, b, k);
-                        }
-                        _ => {}
+                    let mut r = match op {
+                        BinOp::Add => Interval::binary(BinOp::Add, ia, ib),
+                        BinOp::Sub => Interval::binary(BinOp::Sub, ia, ib),
+                        BinOp::Mul => Interval::binary(BinOp::Mul, ia, ib),
+                        BinOp::Min => Interval::binary(BinOp::Min, ia, ib),
+                        BinOp::Max => Interval::binary(BinOp::Max, ia, ib),
+                        op => binary_call(op, ia, ib),
+                    };
+                    if i == next_min {
+                        args[mi] = (ia, ib);
+                        mi += 1;
+                        next_min = at(table.mins.get(mi).copied());
+                    }
+                    if i == next_end {
+                        let (_, m, k) = table.ends[ei];
+                        let (a, b) = args[m as usize];
+                        r = tighter(r, a, b, k);
+                        ei += 1;
+                        next_end = at(table.ends.get(ei).map(|e| e.0));
                     }
                     s[out as usize] = r;
+                    if choice != Choice::Both {
+                        if let Some(c) = choices.as_deref_mut() {
+                            c[i] = choice;
+                        }
+                    }
                 }
                 Instr::Select { out, c, a, b } => {
                     let ci = s[c as usize];
+                    let choice;
                     (s[out as usize], choice) = if ci.lo > 0.0 {
                         (s[a as usize], Choice::Left)
                     } else if ci.hi <= 0.0 {
@@ -488,14 +577,25 @@ impl<'t> IntervalEvaluator<'t> {
                     } else {
                         (Interval::hull(s[a as usize], s[b as usize]), Choice::Both)
                     };
+                    if let Some(c) = choices.as_deref_mut() {
+                        c[i] = choice;
+                    }
                 }
-            }
-            if let Some(c) = choices.as_deref_mut() {
-                c.push(choice);
             }
         }
         s[variant.output()]
     }
+}
+
+/// The operations without a fast path, out of line.
+#[inline(never)]
+fn unary_call(op: UnOp, a: Interval) -> Interval {
+    Interval::unary(op, a)
+}
+
+#[inline(never)]
+fn binary_call(op: BinOp, a: Interval, b: Interval) -> Interval {
+    Interval::binary(op, a, b)
 }
 
 /// `r` (a bound of a smooth minimum of width `k` of operands bounded by

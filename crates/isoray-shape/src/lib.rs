@@ -25,6 +25,7 @@ pub mod ir;
 pub mod library;
 pub mod lipschitz;
 mod lower;
+mod program;
 pub mod simplify;
 pub mod surface;
 pub mod syntax;

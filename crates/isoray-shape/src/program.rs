@@ -1,0 +1,505 @@
+//! Tapes compiled for the batch evaluator.
+//!
+//! A [`Tape`] names its values by slots of the whole tape: a tape
+//! simplified for a small region (see [`crate::simplify`]) keeps the slot
+//! numbers of the full one, so its few dozen instructions read operands
+//! scattered over thousands of slots, and every constant is a block of
+//! [`LANES`] copies of itself. Evaluated block by block, that is memory
+//! traffic: for a fold of a thousand spheres the constants' blocks alone
+//! are three quarters of a megabyte, more than a core's L2 cache.
+//!
+//! A [`Program`] is the same instructions, one for one, over registers
+//! renumbered densely by a linear scan (a register is reused once the
+//! last instruction that reads its value has run), with the constants of
+//! the common arithmetic (+, −, ×, ÷, min, max) as immediate operands
+//! and every other value that does not depend on the point (constants
+//! elsewhere, the prologue's values) loaded into a register once per
+//! block. Each operation is the same f32 (or f64) operation in the same
+//! order as the tape's, so the values are the same, bit for bit.
+
+use crate::eval::{Num, LANES};
+use crate::ir::{BinOp, Instr, Tape, UnOp};
+
+/// What an instruction of a [`Program`] does: one code per operation and
+/// operand form, so that running it is one dispatch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Code {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Min,
+    Max,
+    /// a + imm, a − imm, imm − b, a × imm, a ÷ imm, imm ÷ b, min(a, imm),
+    /// max(a, imm).
+    AddI,
+    SubI,
+    ISub,
+    MulI,
+    DivI,
+    IDiv,
+    MinI,
+    MaxI,
+    Neg,
+    Abs,
+    Sqrt,
+    Square,
+    Unary(UnOp),
+    Binary(BinOp),
+    /// out = c > 0 ? a : b
+    Select,
+    /// Skip the next `b` instructions when register `a` is > 0 at every
+    /// point of the block.
+    Skip,
+}
+
+/// One instruction of a [`Program`].
+#[derive(Debug, Clone, Copy)]
+struct Op<T> {
+    code: Code,
+    out: u32,
+    a: u32,
+    b: u32,
+    c: u32,
+    imm: T,
+}
+
+/// A tape compiled for [`crate::BatchEvaluator`] (see the module docs).
+#[derive(Debug, Clone)]
+pub(crate) struct Program<T> {
+    ops: Vec<Op<T>>,
+    /// Registers it uses; 0, 1 and 2 hold x, y and z.
+    pub(crate) regs: usize,
+    /// (slot, register): the values that do not depend on the point,
+    /// loaded before each block.
+    pub(crate) loads: Vec<(u32, u32)>,
+    /// The register holding the result.
+    pub(crate) output: u32,
+}
+
+/// What the compiler knows of a tape's slots (shared by its rewrites).
+#[derive(Debug, Clone)]
+pub(crate) struct Slots<T> {
+    /// Per slot: its value when it holds a constant.
+    constant: Vec<Option<T>>,
+    /// Per slot: whether it holds a value that does not depend on the
+    /// point (a constant or a prologue value).
+    uniform: Vec<bool>,
+}
+
+impl<T: Num> Slots<T> {
+    pub(crate) fn of(tape: &Tape) -> Self {
+        let mut constant = vec![None; tape.slots()];
+        let mut uniform = vec![false; tape.slots()];
+        for &(s, v) in tape.constants() {
+            constant[s as usize] = Some(T::from_f64(v));
+            uniform[s as usize] = true;
+        }
+        for &(_, s) in tape.prologue().outputs() {
+            uniform[s as usize] = true;
+        }
+        Slots { constant, uniform }
+    }
+}
+
+/// Working memory of [`compile`], kept between calls.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Compiler {
+    /// Per slot: read later (backward pass); per slot: its register.
+    seen: Vec<bool>,
+    reg_of: Vec<u32>,
+    /// Per uniform slot: its load register, or `NONE`.
+    load_of: Vec<u32>,
+    /// Per instruction: which operands (a = 1, b = 2, c = 4) are the last
+    /// reads of their values, and 8 when its result is never read.
+    last: Vec<u8>,
+    free: Vec<u32>,
+}
+
+const NONE: u32 = u32::MAX;
+
+/// The slots an instruction reads, as (a, b, c) with `NONE` for none.
+fn operands(ins: &Instr) -> [u32; 3] {
+    match *ins {
+        Instr::Unary { a, .. } => [a, NONE, NONE],
+        Instr::Binary { a, b, .. } => [a, b, NONE],
+        Instr::Select { c, a, b, .. } => [a, b, c],
+        Instr::Skip { c, .. } => [c, NONE, NONE],
+    }
+}
+
+fn written(ins: &Instr) -> Option<u32> {
+    match *ins {
+        Instr::Unary { out, .. } | Instr::Binary { out, .. } | Instr::Select { out, .. } => Some(out),
+        Instr::Skip { .. } => None,
+    }
+}
+
+impl Compiler {
+    /// `tape` (a tape whose slots `slots` describes, or a rewrite of it)
+    /// as a [`Program`].
+    pub(crate) fn compile<T: Num>(&mut self, tape: &Tape, slots: &Slots<T>) -> Program<T> {
+        let instrs = tape.instrs();
+        let n = tape.slots();
+        let temp = |s: u32| s >= 3 && !slots.uniform[s as usize];
+        // Backwards: the last read of each value, and results never read.
+        self.seen.clear();
+        self.seen.resize(n, false);
+        self.seen[tape.output()] = true;
+        self.last.clear();
+        self.last.resize(instrs.len(), 0);
+        for (i, ins) in instrs.iter().enumerate().rev() {
+            let mut mask = 0u8;
+            if let Some(w) = written(ins) {
+                if !std::mem::replace(&mut self.seen[w as usize], false) {
+                    mask |= 8;
+                }
+            }
+            for (k, &r) in operands(ins).iter().enumerate() {
+                if r != NONE && temp(r) && !self.seen[r as usize] {
+                    self.seen[r as usize] = true;
+                    mask |= 1 << k;
+                }
+            }
+            self.last[i] = mask;
+        }
+        // Forwards: registers from a free list.
+        self.reg_of.clear();
+        self.reg_of.resize(n, NONE);
+        self.load_of.clear();
+        self.load_of.resize(n, NONE);
+        self.free.clear();
+        let mut regs = 3u32;
+        let mut loads = Vec::new();
+        let mut ops = Vec::with_capacity(instrs.len());
+        let zero = T::from_f64(0.0);
+        for (i, ins) in instrs.iter().enumerate() {
+            let mut reg = |s: u32, this: &mut Compiler, regs: &mut u32| -> u32 {
+                if s < 3 {
+                    s
+                } else if slots.uniform[s as usize] {
+                    if this.load_of[s as usize] == NONE {
+                        this.load_of[s as usize] = *regs;
+                        loads.push((s, *regs));
+                        *regs += 1;
+                    }
+                    this.load_of[s as usize]
+                } else {
+                    this.reg_of[s as usize]
+                }
+            };
+            let konst = |s: u32| if s >= 3 { slots.constant[s as usize] } else { None };
+            let mut op = Op {
+                code: Code::Skip,
+                out: NONE,
+                a: NONE,
+                b: NONE,
+                c: NONE,
+                imm: zero,
+            };
+            match *ins {
+                Instr::Unary { op: u, a, .. } => {
+                    op.code = match u {
+                        UnOp::Neg => Code::Neg,
+                        UnOp::Abs => Code::Abs,
+                        UnOp::Sqrt => Code::Sqrt,
+                        UnOp::Square => Code::Square,
+                        u => Code::Unary(u),
+                    };
+                    op.a = reg(a, self, &mut regs);
+                }
+                Instr::Binary { op: bo, a, b, .. } => {
+                    let imm_form = |bo: BinOp, left: bool| -> Option<Code> {
+                        Some(match (bo, left) {
+                            (BinOp::Add, _) => Code::AddI,
+                            (BinOp::Sub, false) => Code::SubI,
+                            (BinOp::Sub, true) => Code::ISub,
+                            (BinOp::Mul, _) => Code::MulI,
+                            (BinOp::Div, false) => Code::DivI,
+                            (BinOp::Div, true) => Code::IDiv,
+                            (BinOp::Min, _) => Code::MinI,
+                            (BinOp::Max, _) => Code::MaxI,
+                            _ => return None,
+                        })
+                    };
+                    // Commutative forms keep the operand order of the tape:
+                    // min and max of a NaN depend on it, so imm op b
+                    // becomes an `I` form only where the order is free.
+                    let commutes = |bo: BinOp| matches!(bo, BinOp::Add | BinOp::Mul);
+                    match (konst(a), konst(b)) {
+                        (None, Some(v)) if imm_form(bo, false).is_some() => {
+                            op.code = imm_form(bo, false).unwrap_or(Code::Binary(bo));
+                            op.a = reg(a, self, &mut regs);
+                            op.imm = v;
+                        }
+                        (Some(v), None) if matches!(bo, BinOp::Sub | BinOp::Div) => {
+                            op.code = imm_form(bo, true).unwrap_or(Code::Binary(bo));
+                            op.b = reg(b, self, &mut regs);
+                            op.imm = v;
+                        }
+                        (Some(v), None) if commutes(bo) => {
+                            op.code = imm_form(bo, true).unwrap_or(Code::Binary(bo));
+                            op.a = reg(b, self, &mut regs);
+                            op.imm = v;
+                        }
+                        _ => {
+                            op.code = match bo {
+                                BinOp::Add => Code::Add,
+                                BinOp::Sub => Code::Sub,
+                                BinOp::Mul => Code::Mul,
+                                BinOp::Div => Code::Div,
+                                BinOp::Min => Code::Min,
+                                BinOp::Max => Code::Max,
+                                bo => Code::Binary(bo),
+                            };
+                            op.a = reg(a, self, &mut regs);
+                            op.b = reg(b, self, &mut regs);
+                        }
+                    }
+                }
+                Instr::Select { c, a, b, .. } => {
+                    op.code = Code::Select;
+                    op.a = reg(a, self, &mut regs);
+                    op.b = reg(b, self, &mut regs);
+                    op.c = reg(c, self, &mut regs);
+                }
+                Instr::Skip { c, len } => {
+                    op.code = Code::Skip;
+                    op.a = reg(c, self, &mut regs);
+                    op.b = len;
+                }
+            }
+            if let Some(w) = written(ins) {
+                let r = self.free.pop().unwrap_or_else(|| {
+                    regs += 1;
+                    regs - 1
+                });
+                op.out = r;
+                // The value w held before is dead (its register was freed
+                // at its last read, or below when it had none).
+                self.reg_of[w as usize] = r;
+                if self.last[i] & 8 != 0 && w as usize != tape.output() {
+                    self.free.push(r);
+                }
+            }
+            // Registers whose values this instruction read last.
+            let ops_in = operands(ins);
+            for (k, &s) in ops_in.iter().enumerate() {
+                if self.last[i] & (1 << k) != 0 {
+                    self.free.push(self.reg_of[s as usize]);
+                }
+            }
+            ops.push(op);
+        }
+        let o = tape.output() as u32;
+        let output = if o < 3 {
+            o
+        } else if slots.uniform[o as usize] {
+            if self.load_of[o as usize] == NONE {
+                self.load_of[o as usize] = regs;
+                loads.push((o, regs));
+                regs += 1;
+            }
+            self.load_of[o as usize]
+        } else {
+            self.reg_of[o as usize]
+        };
+        Program {
+            ops,
+            regs: regs as usize,
+            loads,
+            output,
+        }
+    }
+}
+
+impl<T: Num> Program<T> {
+    /// Runs the program over the first `m` ≤ [`LANES`] lanes of `regs`
+    /// (one block of [`LANES`] values per register; x, y, z and the loads
+    /// already in place).
+    pub(crate) fn run(&self, regs: &mut [T], m: usize) {
+        assert!(m <= LANES && regs.len() >= self.regs * LANES);
+        // The arithmetic runs over whole groups of 8 lanes (the lanes past
+        // `m` hold whatever they held: nothing reads them).
+        let w = m.div_ceil(8).max(1) * 8;
+        let w = w.min(LANES);
+        let base = regs.as_mut_ptr();
+        let mut k = 0;
+        while k < self.ops.len() {
+            let op = self.ops[k];
+            k += 1;
+            // SAFETY: every register is below `self.regs` (the compiler
+            // numbers them so), so each block lies inside `regs`, checked
+            // by the assertion above; the output register is never one the
+            // instruction reads (it is taken from the free list before the
+            // operands' registers are returned to it), so the mutable
+            // block does not overlap the shared ones.
+            unsafe {
+                let blk = |r: u32| &*(base.add(r as usize * LANES) as *const [T; LANES]);
+                let out = |r: u32| &mut *(base.add(r as usize * LANES) as *mut [T; LANES]);
+                macro_rules! un {
+                    ($f:expr) => {{
+                        let (o, a) = (out(op.out), blk(op.a));
+                        for l in 0..w {
+                            o[l] = $f(a[l]);
+                        }
+                    }};
+                }
+                macro_rules! bin {
+                    ($f:expr) => {{
+                        let (o, a, b) = (out(op.out), blk(op.a), blk(op.b));
+                        for l in 0..w {
+                            o[l] = $f(a[l], b[l]);
+                        }
+                    }};
+                }
+                macro_rules! imm {
+                    ($f:expr) => {{
+                        let (o, a) = (out(op.out), blk(op.a));
+                        let v = op.imm;
+                        for l in 0..w {
+                            o[l] = $f(a[l], v);
+                        }
+                    }};
+                }
+                macro_rules! immb {
+                    ($f:expr) => {{
+                        let (o, b) = (out(op.out), blk(op.b));
+                        let v = op.imm;
+                        for l in 0..w {
+                            o[l] = $f(v, b[l]);
+                        }
+                    }};
+                }
+                match op.code {
+                    Code::Add => bin!(|x, y| T::binary(BinOp::Add, x, y)),
+                    Code::Sub => bin!(|x, y| T::binary(BinOp::Sub, x, y)),
+                    Code::Mul => bin!(|x, y| T::binary(BinOp::Mul, x, y)),
+                    Code::Div => bin!(|x, y| T::binary(BinOp::Div, x, y)),
+                    Code::Min => bin!(|x, y| T::binary(BinOp::Min, x, y)),
+                    Code::Max => bin!(|x, y| T::binary(BinOp::Max, x, y)),
+                    Code::AddI => imm!(|x, v| T::binary(BinOp::Add, x, v)),
+                    Code::SubI => imm!(|x, v| T::binary(BinOp::Sub, x, v)),
+                    Code::MulI => imm!(|x, v| T::binary(BinOp::Mul, x, v)),
+                    Code::DivI => imm!(|x, v| T::binary(BinOp::Div, x, v)),
+                    Code::MinI => imm!(|x, v| T::binary(BinOp::Min, x, v)),
+                    Code::MaxI => imm!(|x, v| T::binary(BinOp::Max, x, v)),
+                    Code::ISub => immb!(|v, y| T::binary(BinOp::Sub, v, y)),
+                    Code::IDiv => immb!(|v, y| T::binary(BinOp::Div, v, y)),
+                    Code::Neg => un!(|x| T::unary(UnOp::Neg, x)),
+                    Code::Abs => un!(|x| T::unary(UnOp::Abs, x)),
+                    Code::Sqrt => un!(|x| T::unary(UnOp::Sqrt, x)),
+                    Code::Square => un!(|x| T::unary(UnOp::Square, x)),
+                    Code::Unary(u) => un!(|x| T::unary(u, x)),
+                    Code::Binary(bo) => bin!(|x, y| T::binary(bo, x, y)),
+                    Code::Select => {
+                        let (o, c, a, b) = (out(op.out), blk(op.c), blk(op.a), blk(op.b));
+                        for l in 0..w {
+                            o[l] = if c[l].value() > 0.0 { a[l] } else { b[l] };
+                        }
+                    }
+                    Code::Skip => {
+                        if blk(op.a)[..m].iter().all(|&v| v.value() > 0.0) {
+                            k += op.b as usize;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::interval::{eval_interval_choices, Interval};
+    use crate::simplify::simplify;
+    use crate::{compile, BatchEvaluator, Library, PointEvaluator};
+
+    /// Compiled programs give the point evaluator's values bit for bit,
+    /// for full tapes and simplified ones, over every count of points
+    /// around the block sizes, with parameters, selects and lazy regions.
+    #[test]
+    fn programs_equal_the_point_evaluator() {
+        let lib = Library::new();
+        let shapes = [
+            "smooth_union(smooth_union(sphere(p - vec3(1.0, 0.0, 0.0), 0.5), box(p + vec3(1.0, 0.0, 0.0), 0.4), 0.3), torus(p - vec3(0.0, 1.5, 0.0), 0.6, 0.2), 0.2)",
+            "min(sphere(p, 0.5) + 0.2 * step(0.3, p.x), max(box(p - vec3(0.0, 1.0, 0.0), 0.3), -sphere(p - vec3(0.0, 1.2, 0.0), 0.2)))",
+            "octahedron(twist_y(p, 2.0), 1.0) + 0.1 * sin(7.0 * p.x) - 2.0 / (3.0 + p.y * p.y) + pow(abs(p.z) + 0.1, 1.5)",
+            "sphere(p, 1.0 + 0.25 * sin(t)) - min(0.1, p.x) + max(p.y, -0.3) / 4.0",
+            "p.x",
+            "0.25",
+        ];
+        let mut seed = 5u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % 1_000_000) as f64 / 1_000_000.0
+        };
+        for src in shapes {
+            let sh = compile(&lib, src).unwrap_or_else(|e| panic!("{src}: {e:?}"));
+            let full = sh.tape();
+            let vars = [0.7];
+            let mut variants = vec![full.clone()];
+            for _ in 0..20 {
+                let c: [f64; 3] = std::array::from_fn(|_| rnd() * 3.0 - 1.5);
+                let b: [Interval; 3] = std::array::from_fn(|k| Interval::new(c[k] - 0.3, c[k] + 0.3));
+                let mut choices = Vec::new();
+                eval_interval_choices(full, &vars, b, Some(&mut choices));
+                if let Some(t) = simplify(full, &choices) {
+                    variants.push(t);
+                }
+            }
+            let mut batch = BatchEvaluator::<f32>::new(full);
+            let mut point = PointEvaluator::<f32>::new(full);
+            for v in &variants {
+                for n in [1usize, 3, 8, 9, 63, 64, 65, 130] {
+                    let pts: Vec<[f32; 3]> = (0..n)
+                        .map(|_| std::array::from_fn(|_| (rnd() * 3.0 - 1.5) as f32))
+                        .collect();
+                    let (xs, ys, zs): (Vec<f32>, Vec<f32>, Vec<f32>) = (
+                        pts.iter().map(|p| p[0]).collect(),
+                        pts.iter().map(|p| p[1]).collect(),
+                        pts.iter().map(|p| p[2]).collect(),
+                    );
+                    let mut out = vec![0.0f32; n];
+                    batch.eval_variant(v, &vars, &xs, &ys, &zs, &mut out);
+                    for (i, p) in pts.iter().enumerate() {
+                        // The variant holds near its box only; compare with
+                        // the variant itself run point by point.
+                        let want = point.eval_variant(v, &vars, p[0], p[1], p[2]);
+                        assert_eq!(out[i].to_bits(), want.to_bits(), "{src}: point {p:?} of {n}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// A short tape simplified out of a long one runs in a few registers,
+    /// not over the long tape's thousands of slots.
+    #[test]
+    fn simplified_tapes_run_in_few_registers() {
+        let lib = Library::new();
+        let mut src = String::from("sphere(p, 0.2)");
+        for i in 1..120 {
+            // Distinct centres: a constant slot each.
+            let x = (i % 10) as f64 - 4.5 + 0.001 * i as f64;
+            let y = ((i / 10) % 20) as f64 - 9.5 + 0.0007 * i as f64;
+            src = format!("smooth_union({src}, sphere(p - vec3({x:.4}, {y:.4}, 0.0), 0.2), 0.1)");
+        }
+        let sh = compile(&lib, &src).unwrap();
+        let full = sh.tape();
+        assert!(full.slots() > 200, "{} slots", full.slots());
+        let b = [
+            Interval::new(0.4, 0.6),
+            Interval::new(0.4, 0.6),
+            Interval::new(-0.1, 0.1),
+        ];
+        let mut choices = Vec::new();
+        eval_interval_choices(full, &[], b, Some(&mut choices));
+        let short = simplify(full, &choices).unwrap();
+        assert!(short.len() < 60, "{} instructions", short.len());
+        let prog = super::Compiler::default().compile(&short, &super::Slots::<f32>::of(full));
+        assert!(prog.regs < 24, "{} registers", prog.regs);
+    }
+}
