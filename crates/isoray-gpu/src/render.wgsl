@@ -795,26 +795,40 @@ fn transmission(o: vec3<f32>, l: vec3<f32>, tmax: f32, start: Media) -> vec3<f32
     var origin = o;
     var left = tmax;
     var media = start;
+    // The step past the last interface (absorbed over too).
+    var step = off;
     for (var seg = 0u; seg < MAX_SHADOW_SEGMENTS; seg++) {
         let inside = media.len > 0u;
         var kind = F_CLEAR;
         if (inside) { kind = F_CLEAR_SURFACES; }
-        let h = sphere_trace(kind, origin, l, iso_inf());
-        if (!(h.t < left)) {
-            if (inside) { out *= beer_lambert(object_mat(media_top(media)).absorption, min(left, 1e4)); }
-            break;
+        var h = sphere_trace(kind, origin, l, iso_inf());
+        var obj = 0u;
+        if (inside && field(F_CLEAR, origin) > 0.0) {
+            // The step carried the ray out of every transparent object (a
+            // grazing chord shorter than it): it left the top one within it.
+            h.t = 0.0;
+            obj = media_top(media);
+        } else {
+            if (!(h.t < left)) {
+                if (inside) { out *= beer_lambert(object_mat(media_top(media)).absorption, min(left, 1e4)); }
+                break;
+            }
+            obj = nearest_clear(origin + l * h.t);
         }
         let p = origin + l * h.t;
-        let obj = nearest_clear(p);
-        if (inside) { out *= beer_lambert(object_mat(media_top(media)).absorption, h.t + off); }
+        if (inside) { out *= beer_lambert(object_mat(media_top(media)).absorption, h.t + step); }
         if (media_contains(media, obj)) {
             media_remove(&media, obj);
         } else {
             out *= interface_transmittance(object_mat(obj));
             media_push(&media, obj);
         }
-        origin = p + l * off;
-        left -= h.t + off;
+        // OFFSET hit epsilons of depth past the interface, not of length
+        // along the ray (the CPU's MIN_COS bounds the cosine).
+        let c = abs(dot3(normalize_or_zero(gradient(F_CLEAR, p, cfg.normals)), l));
+        step = off / max(c, 0.05);
+        origin = p + l * step;
+        left -= h.t + step;
         if (!(max3(out) > 1e-4 && left > 0.0)) { break; }
     }
     return out;

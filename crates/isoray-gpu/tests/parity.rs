@@ -197,6 +197,22 @@ fn every_example_scene_renders_as_on_the_cpu_with_the_interpreted_kernel() {
     every_example(Some(Kernel::Interpreted), INTERPRETED_ON_LAVAPIPE_FAILS);
 }
 
+/// Shadows through glass when both renderers march it (no closed forms):
+/// the step past each interface scaled by the angle, and the exit a step
+/// carries a grazing ray past, as on the CPU.
+#[test]
+fn marched_glass_shadows_render_as_on_the_cpu() {
+    let mut gpu = GpuRenderer::new().unwrap_or_else(|e| panic!("{e}"));
+    let path = root().join("examples/optics.toml");
+    let over: Vec<String> = ["render.width=160", "render.height=90", "render.analytic=false"]
+        .map(String::from)
+        .to_vec();
+    let scene = isoray_scene::load(&path, &over).unwrap_or_else(|e| panic!("{}", e.rendered));
+    let p = parity_of(&scene, &path, &mut gpu, None);
+    eprintln!("{p:?}");
+    assert!(p.over <= 0.01 && p.mean < 1.0 && p.depth <= 1e-3, "{p:?}");
+}
+
 /// The debug views, the shadow modes, fixed-step marching and the
 /// supersample patterns (settings:
 /// one pipeline for all)

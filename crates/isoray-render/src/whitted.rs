@@ -89,6 +89,11 @@ impl Packet {
 /// they travel into, so they do not find their own surface again.
 const OFFSET: f32 = 10.0;
 
+/// Shadow rays through transparent objects step past an interface by
+/// OFFSET hit epsilons over the cosine of their angle with its normal, this
+/// cosine at least (at most 20 times the plain step).
+const MIN_COS: f32 = 0.05;
+
 /// [`Worker::transmission`] when every transparent object is a plane or
 /// a sphere (`closed`): each ray's crossings of their surfaces before
 /// `tmax`, in order, toggle the objects it is inside, and each stretch
@@ -292,6 +297,9 @@ impl Worker<'_> {
         let mut origin = o.to_vec();
         let mut left = tmax.to_vec();
         let mut media = start.to_vec();
+        // The step each ray took past its last interface (absorbed over
+        // too: its segment began that far before the traced origin).
+        let mut step = vec![off; n];
         let mut active: Vec<usize> = (0..n).collect();
         let mut evals = 0;
         let clear_of = |obj: usize| ctx.surfaces[obj].interface_transmittance();
@@ -309,9 +317,27 @@ impl Worker<'_> {
                 if group.is_empty() {
                     continue;
                 }
-                let Some(found) = self.next_interfaces(ctx, inside, &group, &origin, l, &left, &mut evals) else {
+                let Some(mut found) = self.next_interfaces(ctx, inside, &group, &origin, l, &left, &mut evals) else {
                     break;
                 };
+                if inside {
+                    // A ray the step carried out of every transparent object
+                    // (a grazing chord shorter than the step) left the one it
+                    // is in within the step.
+                    let left_within = self.outside_all(&group, &origin, &mut evals);
+                    for (r, &i) in group.iter().enumerate() {
+                        if let (true, Some(top)) = (left_within[r], media[i].top()) {
+                            found[r] = Some((0.0, top));
+                        }
+                    }
+                }
+                let crossing: Vec<Vec3> = group
+                    .iter()
+                    .zip(&found)
+                    .filter_map(|(&i, hit)| hit.map(|(t, _)| origin[i] + l[i] * t))
+                    .collect();
+                let normals = self.clear_normals(ctx, &crossing, &mut evals);
+                let mut k = 0;
                 for (&i, hit) in group.iter().zip(found) {
                     let Some((t, obj)) = hit else {
                         // No further interface before the light (inside: absorb the rest).
@@ -321,8 +347,7 @@ impl Worker<'_> {
                         continue;
                     };
                     if let Some(top) = media[i].top() {
-                        // The segment began `off` before the traced origin (the step past the interface).
-                        out[i] *= beer_lambert(ctx.surfaces[top].absorption, t + off);
+                        out[i] *= beer_lambert(ctx.surfaces[top].absorption, t + step[i]);
                     }
                     if media[i].contains(obj) {
                         media[i].remove(obj);
@@ -330,8 +355,15 @@ impl Worker<'_> {
                         out[i] *= clear_of(obj);
                         media[i].push(obj);
                     }
-                    origin[i] = (origin[i] + l[i] * t) + l[i] * off;
-                    left[i] -= t + off;
+                    // Past the interface by OFFSET hit epsilons of depth, not
+                    // of length along the ray: at a grazing angle a fixed
+                    // length leaves the ray within the hit epsilon of the
+                    // surface it crossed, which it then finds again at once.
+                    let cos = normals[k].dot(l[i]).abs();
+                    k += 1;
+                    step[i] = off / cos.max(MIN_COS);
+                    origin[i] = (origin[i] + l[i] * t) + l[i] * step[i];
+                    left[i] -= t + step[i];
                     if out[i].max_element() > 1e-4 && left[i] > 0.0 {
                         still.push(i);
                     }
@@ -342,6 +374,40 @@ impl Worker<'_> {
         // Rays still crossing interfaces after the last segment (grazing a
         // surface, in and out within the offset) keep what they have.
         (out, evals)
+    }
+
+    /// Per ray `group[r]`: whether its origin lies outside every
+    /// transparent object (the union of them positive there).
+    fn outside_all(&mut self, group: &[usize], origin: &[Vec3], evals: &mut u64) -> Vec<bool> {
+        let Some(se) = self.shadow_evals.as_mut() else {
+            return vec![false; group.len()];
+        };
+        let xs: Vec<f32> = group.iter().map(|&i| origin[i].x).collect();
+        let ys: Vec<f32> = group.iter().map(|&i| origin[i].y).collect();
+        let zs: Vec<f32> = group.iter().map(|&i| origin[i].z).collect();
+        let mut d = vec![0.0f32; group.len()];
+        se.clear.eval(&xs, &ys, &zs, &mut d);
+        *evals += group.len() as u64;
+        d.into_iter().map(|d| d > 0.0).collect()
+    }
+
+    /// Unit normals of the transparent objects' union at the points (by
+    /// the scene's gradient stencil; zero where the gradient vanishes).
+    fn clear_normals(&mut self, ctx: &Ctx, pts: &[Vec3], evals: &mut u64) -> Vec<Vec3> {
+        let m = pts.len();
+        let Some(se) = self.shadow_evals.as_mut().filter(|_| m > 0) else {
+            return vec![Vec3::Y; m];
+        };
+        let xs: Vec<f32> = pts.iter().map(|p| p.x).collect();
+        let ys: Vec<f32> = pts.iter().map(|p| p.y).collect();
+        let zs: Vec<f32> = pts.iter().map(|p| p.z).collect();
+        let (mut gx, mut gy, mut gz) = (vec![0.0f32; m], vec![0.0f32; m], vec![0.0f32; m]);
+        se.clear
+            .gradients(&xs, &ys, &zs, ctx.gradient, &mut gx, &mut gy, &mut gz);
+        *evals += (m * 4) as u64;
+        (0..m)
+            .map(|q| Vec3::new(gx[q], gy[q], gz[q]).normalize_or_zero())
+            .collect()
     }
 
     /// The next transparent interface along each ray `group[r]` (from
