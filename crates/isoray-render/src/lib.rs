@@ -746,7 +746,22 @@ impl<'s> Worker<'s> {
             None => Field::new(tape, vars),
         };
         Worker {
-            scene_eval: field(ctx.scene.shape.tape()),
+            scene_eval: match ctx.domain.filter(|_| ctx.scene.objects.len() > 1) {
+                // The scene's distance is the fold of its objects'.
+                Some((center, half)) => {
+                    let tapes: Vec<&'s isoray_shape::Tape> = ctx.scene.objects.iter().map(|o| o.shape.tape()).collect();
+                    let probe = match ctx.scene_reach.and_then(|r| r.surface()) {
+                        Some(b) => (
+                            std::array::from_fn(|k| 0.5 * (b.lo[k] + b.hi[k])),
+                            (0..3).map(|k| 0.5 * (b.hi[k] - b.lo[k])).fold(1e-3, f64::max),
+                        ),
+                        None => (center, half),
+                    };
+                    let k = ctx.scene.render.blend;
+                    Field::pruned_fold(ctx.scene.shape.tape(), &tapes, k, vars, center, half, probe)
+                }
+                None => field(ctx.scene.shape.tape()),
+            },
             surf_eval: field(ctx.scene.derived().surfaces.tape()),
             counts: RayCounts::default(),
             rest_eval: ctx.scene.derived().rest.as_ref().map(|r| field(r.tape())),

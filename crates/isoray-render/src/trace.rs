@@ -42,6 +42,40 @@ impl<'s> Field<'s> {
         }
     }
 
+    /// [`Field::pruned`] for a field that is the fold of the objects'
+    /// `objects` tapes by smooth union of width `k` (0: min), in order: its
+    /// regions specialised object by object ([`isoray_shape::fold`]), which
+    /// is several times cheaper than simplifying the tape; as
+    /// [`Field::pruned`] when the fold's program does not give `tape`'s
+    /// values bit for bit at sample points of the cube of half-size
+    /// `probe.1` around `probe.0` (where the objects are).
+    #[allow(clippy::too_many_arguments)]
+    pub fn pruned_fold(
+        tape: &'s Tape,
+        objects: &[&'s Tape],
+        k: f64,
+        vars: &'s [f64],
+        center: [f64; 3],
+        half: f64,
+        probe: ([f64; 3], f64),
+    ) -> Self {
+        let ok = prunable(tape) && half.is_finite() && half > 0.0 && center.iter().all(|c| c.is_finite());
+        let fold = ok
+            .then(|| isoray_shape::fold::Fold::new(objects, k, vars, tape, probe.0, probe.1))
+            .flatten();
+        Field {
+            eval: BatchEvaluator::new(tape),
+            vars,
+            prune: ok.then(|| Box::new(Pruner::with_fold(tape, vars, center, half, fold))),
+        }
+    }
+
+    /// Whether its regions are specialised object by object (see
+    /// [`Field::pruned_fold`]).
+    pub fn by_objects(&self) -> bool {
+        self.prune.as_ref().is_some_and(|p| p.by_objects())
+    }
+
     /// Tape instructions run by pruned evaluations so far, summed over
     /// points (None when not pruned).
     pub fn instructions_run(&self) -> Option<u64> {

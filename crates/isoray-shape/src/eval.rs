@@ -453,28 +453,7 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
             .programs
             .entry(tape.id())
             .or_insert_with(|| compiler.compile(tape, info));
-        if self.regs.len() < prog.regs * LANES {
-            self.regs.resize(prog.regs * LANES, T::from_f64(0.0));
-        }
-        let n = xs.len().min(ys.len()).min(zs.len()).min(out.len());
-        let regs = &mut self.regs;
-        let mut i = 0;
-        while i < n {
-            let m = (n - i).min(LANES);
-            regs[..m].copy_from_slice(&xs[i..i + m]);
-            regs[LANES..LANES + m].copy_from_slice(&ys[i..i + m]);
-            regs[2 * LANES..2 * LANES + m].copy_from_slice(&zs[i..i + m]);
-            // The lanes the program computes (whole groups of 8).
-            let w = (m.div_ceil(8) * 8).min(LANES);
-            for &(s, r) in &prog.loads {
-                let r = r as usize * LANES;
-                regs[r..r + w].fill(self.values[s as usize]);
-            }
-            prog.run(regs, m);
-            let o = prog.output as usize * LANES;
-            out[i..i + m].copy_from_slice(&regs[o..o + m]);
-            i += m;
-        }
+        prog.eval(&mut self.regs, &self.values, xs, ys, zs, out);
     }
 
     /// Gradients at the points by finite differences (or dual numbers) into

@@ -476,6 +476,11 @@ impl<'t> IntervalEvaluator<'t> {
         }
     }
 
+    /// The tape it was made for.
+    pub fn tape(&self) -> &'t Tape {
+        self.tape
+    }
+
     /// Bounds of `variant` (this evaluator's tape or a rewrite of it, see
     /// [`Tape::same_frame`]) over the box `xyz`, recording the choices of
     /// its min, max and select instructions in `choices` when given (see

@@ -20,6 +20,7 @@ pub mod algebraic;
 pub mod conformance;
 pub mod diag;
 pub mod eval;
+pub mod fold;
 pub mod interval;
 pub mod ir;
 pub mod library;

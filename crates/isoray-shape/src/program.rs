@@ -51,6 +51,9 @@ enum Code {
     /// Skip the next `b` instructions when register `a` is > 0 at every
     /// point of the block.
     Skip,
+    /// out = imm (a value that does not depend on the point, in a program
+    /// put together from several: [`Assembler`]).
+    Fill,
 }
 
 /// One instruction of a [`Program`].
@@ -71,7 +74,7 @@ pub(crate) struct Program<T> {
     /// Registers it uses; 0, 1 and 2 hold x, y and z.
     pub(crate) regs: usize,
     /// (slot, register): the values that do not depend on the point,
-    /// loaded before each block.
+    /// loaded before each block (from the evaluator's values by slot).
     pub(crate) loads: Vec<(u32, u32)>,
     /// The register holding the result.
     pub(crate) output: u32,
@@ -313,7 +316,144 @@ impl Compiler {
     }
 }
 
+/// The operations [`Assembler::op`] appends (a fold's own arithmetic).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum FoldOp {
+    /// a − b
+    Sub,
+    /// |a|
+    Abs,
+    /// imm − a
+    ImmSub,
+    /// max(a, imm)
+    MaxImm,
+    /// a²
+    Square,
+    /// a × imm
+    MulImm,
+    /// min(a, b)
+    Min,
+    /// max(a, a): a copy
+    Copy,
+}
+
+/// Puts a program together from several compiled ones and a few
+/// operations of its own ([`crate::fold`]).
+#[derive(Debug, Clone)]
+pub(crate) struct Assembler<T> {
+    prog: Program<T>,
+}
+
+impl<T: Num> Assembler<T> {
+    pub(crate) fn new() -> Self {
+        Assembler {
+            prog: Program {
+                ops: Vec::new(),
+                regs: 3,
+                loads: Vec::new(),
+                output: 0,
+            },
+        }
+    }
+
+    /// Appends `p`'s instructions, its registers from 3 on moved to
+    /// `base` on, after filling its loads' registers from `values` (its
+    /// values by slot: the registers are shared with what runs before, so
+    /// they are filled here, not once per block). Returns the register
+    /// holding its result.
+    pub(crate) fn append(&mut self, p: &Program<T>, values: &[T], base: u32) -> u32 {
+        let map = |r: u32| if r < 3 || r == NONE { r } else { r - 3 + base };
+        for &(s, r) in &p.loads {
+            self.prog.ops.push(Op {
+                code: Code::Fill,
+                out: map(r),
+                a: NONE,
+                b: NONE,
+                c: NONE,
+                imm: values[s as usize],
+            });
+        }
+        for op in &p.ops {
+            let mut o = *op;
+            o.out = map(o.out);
+            o.a = map(o.a);
+            if o.code != Code::Skip {
+                o.b = map(o.b);
+            }
+            o.c = map(o.c);
+            self.prog.ops.push(o);
+        }
+        self.prog.regs = self.prog.regs.max(map(p.regs as u32 - 1) as usize + 1);
+        map(p.output)
+    }
+
+    /// Appends `out = op(a, b)` (or with the immediate `imm`).
+    pub(crate) fn op(&mut self, op: FoldOp, out: u32, a: u32, b: u32, imm: T) {
+        let (code, b) = match op {
+            FoldOp::Sub => (Code::Sub, b),
+            FoldOp::Abs => (Code::Abs, NONE),
+            FoldOp::ImmSub => (Code::ISub, a),
+            FoldOp::MaxImm => (Code::MaxI, NONE),
+            FoldOp::Square => (Code::Square, NONE),
+            FoldOp::MulImm => (Code::MulI, NONE),
+            FoldOp::Min => (Code::Min, b),
+            FoldOp::Copy => (Code::Max, a),
+        };
+        debug_assert!(out != a && out != b, "an operation never writes what it reads");
+        let a = if code == Code::ISub { NONE } else { a };
+        self.prog.ops.push(Op {
+            code,
+            out,
+            a,
+            b,
+            c: NONE,
+            imm,
+        });
+        let top = [out, a, b].into_iter().filter(|&r| r != NONE).max().unwrap_or(0);
+        self.prog.regs = self.prog.regs.max(top as usize + 1);
+    }
+
+    /// The program, its result in register `output`.
+    pub(crate) fn finish(mut self, output: u32) -> Program<T> {
+        self.prog.output = output;
+        self.prog.regs = self.prog.regs.max(output as usize + 1);
+        self.prog
+    }
+}
+
 impl<T: Num> Program<T> {
+    /// Instructions per point.
+    pub(crate) fn len(&self) -> usize {
+        self.ops.len()
+    }
+
+    /// Evaluates the program at the points (xs[i], ys[i], zs[i]) into
+    /// `out[i]`, block by block in `regs` (grown as needed), its loads
+    /// taken from `values` (by slot).
+    pub(crate) fn eval(&self, regs: &mut Vec<T>, values: &[T], xs: &[T], ys: &[T], zs: &[T], out: &mut [T]) {
+        if regs.len() < self.regs * LANES {
+            regs.resize(self.regs * LANES, T::from_f64(0.0));
+        }
+        let n = xs.len().min(ys.len()).min(zs.len()).min(out.len());
+        let mut i = 0;
+        while i < n {
+            let m = (n - i).min(LANES);
+            regs[..m].copy_from_slice(&xs[i..i + m]);
+            regs[LANES..LANES + m].copy_from_slice(&ys[i..i + m]);
+            regs[2 * LANES..2 * LANES + m].copy_from_slice(&zs[i..i + m]);
+            // The lanes the program computes (whole groups of 8).
+            let w = (m.div_ceil(8) * 8).min(LANES);
+            for &(s, r) in &self.loads {
+                let r = r as usize * LANES;
+                regs[r..r + w].fill(values[s as usize]);
+            }
+            self.run(regs, m);
+            let o = self.output as usize * LANES;
+            out[i..i + m].copy_from_slice(&regs[o..o + m]);
+            i += m;
+        }
+    }
+
     /// Runs the program over the first `m` ≤ [`LANES`] lanes of `regs`
     /// (one block of [`LANES`] values per register; x, y, z and the loads
     /// already in place).
@@ -402,6 +542,10 @@ impl<T: Num> Program<T> {
                         if blk(op.a)[..m].iter().all(|&v| v.value() > 0.0) {
                             k += op.b as usize;
                         }
+                    }
+                    Code::Fill => {
+                        let o = out(op.out);
+                        o[..w].fill(op.imm);
                     }
                 }
             }
