@@ -565,6 +565,10 @@ struct Ctx<'s> {
     /// form: those objects (index and form), which shadow rays then
     /// intersect instead of marching.
     clear_closed: Option<Vec<(usize, isoray_scene::analytic::Analytic)>>,
+    /// Per object, the sphere its distance is, when it is (with
+    /// `render.prune` on and several objects; empty otherwise): bounded in
+    /// closed form by the scene field's object-level cells.
+    object_spheres: Vec<Option<([f64; 3], f64)>>,
     /// The planes and spheres in closed form that block hard shadow rays:
     /// the opaque ones when shadow rays trace transparent objects apart,
     /// else all.
@@ -607,18 +611,23 @@ impl<'s> Ctx<'s> {
         // them (as it does without closed forms).
         // When every object is a sphere, the scene's reach (and the
         // penumbra's, of the same field) is a union of balls' boxes.
-        let spheres: Option<Vec<([f64; 3], f64)>> = (domain.is_some() && scene.objects.len() > 1)
-            .then(|| {
-                scene
-                    .objects
-                    .par_iter()
-                    .map(|o| match o.closed_form(&scene.inputs) {
-                        Some(isoray_scene::analytic::Analytic::Sphere { c, r }) => Some((c, r)),
-                        _ => None,
-                    })
-                    .collect()
-            })
-            .flatten();
+        let object_spheres: Vec<Option<([f64; 3], f64)>> = if domain.is_some() && scene.objects.len() > 1 {
+            scene
+                .objects
+                .par_iter()
+                .map(|o| match o.closed_form(&scene.inputs) {
+                    Some(isoray_scene::analytic::Analytic::Sphere { c, r }) => Some((c, r)),
+                    _ => None,
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let spheres: Option<Vec<([f64; 3], f64)>> = object_spheres
+            .iter()
+            .copied()
+            .collect::<Option<Vec<_>>>()
+            .filter(|s| !s.is_empty());
         let reach_above = |tape: &isoray_shape::Tape, above: f64| {
             let rays = rays.filter(|_| r.view != View::Steps)?;
             let (c, h) = domain?;
@@ -686,6 +695,7 @@ impl<'s> Ctx<'s> {
             penumbra_reach,
             clear_closed,
             opaque_closed,
+            object_spheres,
             surfaces,
             material_of,
             material_surfaces,
@@ -758,7 +768,8 @@ impl<'s> Worker<'s> {
                         None => (center, half),
                     };
                     let k = ctx.scene.render.blend;
-                    Field::pruned_fold(ctx.scene.shape.tape(), &tapes, k, vars, center, half, probe)
+                    let spheres = &ctx.object_spheres;
+                    Field::pruned_fold(ctx.scene.shape.tape(), &tapes, spheres, k, vars, center, half, probe)
                 }
                 None => field(ctx.scene.shape.tape()),
             },

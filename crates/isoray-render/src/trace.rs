@@ -43,7 +43,8 @@ impl<'s> Field<'s> {
     }
 
     /// [`Field::pruned`] for a field that is the fold of the objects'
-    /// `objects` tapes by smooth union of width `k` (0: min), in order: its
+    /// `objects` tapes by smooth union of width `k` (0: min), in order (and
+    /// `spheres`: the sphere each object's distance is, when it is): its
     /// regions specialised object by object ([`isoray_shape::fold`]), which
     /// is several times cheaper than simplifying the tape; as
     /// [`Field::pruned`] when the fold's program does not give `tape`'s
@@ -53,6 +54,7 @@ impl<'s> Field<'s> {
     pub fn pruned_fold(
         tape: &'s Tape,
         objects: &[&'s Tape],
+        spheres: &[Option<([f64; 3], f64)>],
         k: f64,
         vars: &'s [f64],
         center: [f64; 3],
@@ -61,7 +63,7 @@ impl<'s> Field<'s> {
     ) -> Self {
         let ok = prunable(tape) && half.is_finite() && half > 0.0 && center.iter().all(|c| c.is_finite());
         let fold = ok
-            .then(|| isoray_shape::fold::Fold::new(objects, k, vars, tape, probe.0, probe.1))
+            .then(|| isoray_shape::fold::Fold::new(objects, spheres, k, vars, tape, probe.0, probe.1))
             .flatten();
         Field {
             eval: BatchEvaluator::new(tape),

@@ -26,6 +26,9 @@ struct Part<'t> {
     /// Its values by slot (constants and the prologue's, at the inputs).
     values: Vec<f32>,
     bounds: IntervalEvaluator<'t>,
+    /// Its centre and radius when its distance is a sphere's: bounded in
+    /// closed form.
+    sphere: Option<([f64; 3], f64)>,
 }
 
 /// The fold of objects' distances (see the module docs), ready to
@@ -81,14 +84,26 @@ impl<'t> Fold<'t> {
     /// tape of that fold) at sample points of the cube of half-size `half`
     /// around `center`: None unless every value is the scene tape's bit for
     /// bit (then the caller simplifies the scene's tape instead), or when
-    /// there are no objects or a tape has lazy regions.
-    pub fn new(tapes: &[&'t Tape], k: f64, vars: &[f64], scene: &Tape, center: [f64; 3], half: f64) -> Option<Self> {
+    /// there are no objects or a tape has lazy regions. `spheres` gives,
+    /// per object (or none), the centre and radius of the sphere its
+    /// distance is (as recognised for closed-form intersection): such an
+    /// object is bounded over a box in closed form, a few operations
+    /// instead of its tape's interval arithmetic.
+    pub fn new(
+        tapes: &[&'t Tape],
+        spheres: &[Option<([f64; 3], f64)>],
+        k: f64,
+        vars: &[f64],
+        scene: &Tape,
+        center: [f64; 3],
+        half: f64,
+    ) -> Option<Self> {
         if tapes.is_empty() || !(k >= 0.0 && k.is_finite()) {
             return None;
         }
         let mut compiler = Compiler::default();
         let mut parts = Vec::with_capacity(tapes.len());
-        for &t in tapes {
+        for (j, &t) in tapes.iter().enumerate() {
             if t.instrs().iter().any(|i| matches!(i, crate::ir::Instr::Skip { .. })) {
                 return None;
             }
@@ -105,6 +120,11 @@ impl<'t> Fold<'t> {
                 program: compiler.compile(t, &slots),
                 values,
                 bounds: IntervalEvaluator::new(t, vars),
+                sphere: spheres
+                    .get(j)
+                    .copied()
+                    .flatten()
+                    .filter(|(c, r)| r.is_finite() && c.iter().all(|x| x.is_finite())),
             });
         }
         let base = M + 1;
@@ -123,7 +143,7 @@ impl<'t> Fold<'t> {
             seed ^= seed << 17;
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
-        let n = 256;
+        let n = 64;
         let mut p: [Vec<f32>; 3] = Default::default();
         for _ in 0..n {
             for (k, v) in p.iter_mut().enumerate() {
@@ -160,10 +180,16 @@ impl<'t> Fold<'t> {
         let margin = |a: f64, b: f64| 1e-5 * (a.abs() + b.abs() + k + size);
         let mut kept: Vec<u32> = Vec::new();
         let mut acc: Option<Interval> = None;
+
         for &j in &cell.objects {
             let part = &mut self.parts[j as usize];
-            let t = part.bounds.tape();
-            let n = part.bounds.eval(t, bx, None);
+            let n = match part.sphere {
+                Some((c, r)) => sphere_bound(c, r, bx),
+                None => {
+                    let t = part.bounds.tape();
+                    part.bounds.eval(t, bx, None)
+                }
+            };
             if n.lo.is_nan() || n.hi.is_nan() {
                 return None;
             }
@@ -233,6 +259,29 @@ impl<'t> Fold<'t> {
     pub fn eval(&mut self, cell: &FoldCell, xs: &[f32], ys: &[f32], zs: &[f32], out: &mut [f32]) {
         cell.program.eval(&mut self.regs, &[], xs, ys, zs, out);
     }
+}
+
+/// Bounds of |p − c| − r over the box: the distances from c to the box's
+/// nearest and furthest points, padded for rounding (and for the centre
+/// and radius being recognised, to ~1e-9, rather than read).
+fn sphere_bound(c: [f64; 3], r: f64, bx: [Interval; 3]) -> Interval {
+    let (mut near, mut far) = (0.0f64, 0.0f64);
+    for k in 0..3 {
+        let (lo, hi) = (bx[k].lo - c[k], bx[k].hi - c[k]);
+        let n = if lo > 0.0 {
+            lo
+        } else if hi < 0.0 {
+            -hi
+        } else {
+            0.0
+        };
+        let f = lo.abs().max(hi.abs());
+        near += n * n;
+        far += f * f;
+    }
+    let size = c.iter().fold(r.abs(), |m, x| m.max(x.abs())) + far.sqrt();
+    let pad = 1e-7 * (1.0 + size);
+    Interval::new(near.sqrt() - r - pad, far.sqrt() - r + pad)
 }
 
 /// Bounds of the smooth union of width k (min for k = 0) of operands
