@@ -80,6 +80,26 @@ impl Analytic {
                 }
             }
         }
+        // And all around a sphere, not only on the side the probes see it
+        // from: a capsule far from the probes is its near cap's sphere
+        // from there.
+        if let Analytic::Sphere { c, r } = *self {
+            for x in -1..=1 {
+                for y in -1..=1 {
+                    for z in -1..=1 {
+                        let u = [x as f64, y as f64, z as f64];
+                        let l = len(u);
+                        if l == 0.0 {
+                            continue;
+                        }
+                        for f in [0.5, 1.0, 1.05, 1.5] {
+                            let s = f * r / l;
+                            out.push([c[0] + s * u[0], c[1] + s * u[1], c[2] + s * u[2]]);
+                        }
+                    }
+                }
+            }
+        }
         out
     }
 
@@ -201,6 +221,14 @@ mod tests {
         // Still a sphere where the clip never matters.
         assert!(matches!(
             rec("max(sphere(p, 1.0), sphere(p, 1.5))"),
+            Some(Analytic::Sphere { .. })
+        ));
+        // A capsule far from the probes is, from them, its near cap's
+        // sphere; all around, it is not (the character example's limbs).
+        assert_eq!(rec("capsule(p - vec3(0.9, 5.3, -0.4), 0.72, 0.16)"), None);
+        assert_eq!(rec("capsule(p - vec3(0.0, -9.0, 0.0), 0.5, 0.2)"), None);
+        assert!(matches!(
+            rec("sphere(p - vec3(0.9, 5.3, -0.4), 0.16)"),
             Some(Analytic::Sphere { .. })
         ));
     }
