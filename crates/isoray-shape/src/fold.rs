@@ -39,7 +39,7 @@ pub struct Fold<'t> {
     /// The smooth union's width (0: `min`).
     k: f64,
     /// The first register of the objects' own (registers 3 and 4 hold the
-    /// fold so far, 5 to 11 its operations' values).
+    /// fold so far, 5 the smooth union's 0.25 / k).
     base: u32,
     regs: Vec<f32>,
 }
@@ -69,14 +69,10 @@ impl FoldCell {
     }
 }
 
+/// The fold so far (and 4: each operation writes the other).
 const ACC: u32 = 3;
-const D: u32 = 5;
-const AD: u32 = 6;
-const KD: u32 = 7;
-const H: u32 = 8;
-const H2: u32 = 9;
-const CORR: u32 = 10;
-const M: u32 = 11;
+/// 0.25 / k, the smooth union's constant factor.
+const CORR: u32 = 5;
 
 impl<'t> Fold<'t> {
     /// The fold of the objects' `tapes` in order with width `k` (0: by
@@ -127,7 +123,7 @@ impl<'t> Fold<'t> {
                     .filter(|(c, r)| r.is_finite() && c.iter().all(|x| x.is_finite())),
             });
         }
-        let base = M + 1;
+        let base = CORR + 1;
         let mut fold = Fold {
             parts,
             k,
@@ -226,6 +222,9 @@ impl<'t> Fold<'t> {
         let k = self.k;
         let (kk, c) = (k as f32, (0.25 / k) as f32);
         let mut acc = ACC;
+        if k > 0.0 && objects.len() > 1 {
+            a.op(FoldOp::Fill, CORR, CORR, CORR, c);
+        }
         for (i, &j) in objects.iter().enumerate() {
             let part = &self.parts[j as usize];
             let n = a.append(&part.program, &part.values, self.base);
@@ -238,14 +237,14 @@ impl<'t> Fold<'t> {
             // two objects as they come, later objects before the fold.
             let (m0, m1) = if j == 1 { (acc, n) } else { (n, acc) };
             if k > 0.0 {
-                a.op(FoldOp::Sub, D, acc, n, 0.0);
-                a.op(FoldOp::Abs, AD, D, D, 0.0);
-                a.op(FoldOp::ImmSub, KD, AD, AD, kk);
-                a.op(FoldOp::MaxImm, H, KD, KD, 0.0);
-                a.op(FoldOp::Square, H2, H, H, 0.0);
-                a.op(FoldOp::MulImm, CORR, H2, H2, c);
-                a.op(FoldOp::Min, M, m0, m1, 0.0);
-                a.op(FoldOp::Sub, next, M, CORR, 0.0);
+                // One operation for the smooth union's eight (CORR holds
+                // 0.25 / k).
+                let op = if m0 == acc {
+                    FoldOp::SmoothUnionAB
+                } else {
+                    FoldOp::SmoothUnionBA
+                };
+                a.smooth_union(op, next, acc, n, CORR, kk);
             } else {
                 a.op(FoldOp::Min, next, m0, m1, 0.0);
             }

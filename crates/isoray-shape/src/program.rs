@@ -54,6 +54,13 @@ enum Code {
     /// out = imm (a value that does not depend on the point, in a program
     /// put together from several: [`Assembler`]).
     Fill,
+    /// The eight operations of `Builder::smooth_union` of a (the fold so
+    /// far) and b (an object) with width imm, `c` the register holding
+    /// 0.25 / imm: d = a − b, h = max(imm − |d|, 0), then min(a, b) (or
+    /// min(b, a) for `SmoothUnionBA`) − h² · c, each the same operation
+    /// as the tape's in the same order.
+    SmoothUnionAB,
+    SmoothUnionBA,
 }
 
 /// One instruction of a [`Program`].
@@ -319,22 +326,17 @@ impl Compiler {
 /// The operations [`Assembler::op`] appends (a fold's own arithmetic).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum FoldOp {
-    /// a − b
-    Sub,
-    /// |a|
-    Abs,
-    /// imm − a
-    ImmSub,
-    /// max(a, imm)
-    MaxImm,
-    /// a²
-    Square,
-    /// a × imm
-    MulImm,
     /// min(a, b)
     Min,
     /// max(a, a): a copy
     Copy,
+    /// `imm` into register a (out)
+    Fill,
+    /// The smooth union of a and b with width imm and 0.25 / imm in
+    /// register c, min's operands as (a, b) or (b, a): see
+    /// [`Assembler::smooth_union`].
+    SmoothUnionAB,
+    SmoothUnionBA,
 }
 
 /// Puts a program together from several compiled ones and a few
@@ -390,17 +392,13 @@ impl<T: Num> Assembler<T> {
     /// Appends `out = op(a, b)` (or with the immediate `imm`).
     pub(crate) fn op(&mut self, op: FoldOp, out: u32, a: u32, b: u32, imm: T) {
         let (code, b) = match op {
-            FoldOp::Sub => (Code::Sub, b),
-            FoldOp::Abs => (Code::Abs, NONE),
-            FoldOp::ImmSub => (Code::ISub, a),
-            FoldOp::MaxImm => (Code::MaxI, NONE),
-            FoldOp::Square => (Code::Square, NONE),
-            FoldOp::MulImm => (Code::MulI, NONE),
             FoldOp::Min => (Code::Min, b),
             FoldOp::Copy => (Code::Max, a),
+            FoldOp::Fill => (Code::Fill, NONE),
+            FoldOp::SmoothUnionAB | FoldOp::SmoothUnionBA => unreachable!("see Assembler::smooth_union"),
         };
+        let a = if code == Code::Fill { NONE } else { a };
         debug_assert!(out != a && out != b, "an operation never writes what it reads");
-        let a = if code == Code::ISub { NONE } else { a };
         self.prog.ops.push(Op {
             code,
             out,
@@ -411,6 +409,27 @@ impl<T: Num> Assembler<T> {
         });
         let top = [out, a, b].into_iter().filter(|&r| r != NONE).max().unwrap_or(0);
         self.prog.regs = self.prog.regs.max(top as usize + 1);
+    }
+
+    /// Appends `out` = the smooth union of the fold so far `a` and the
+    /// object `b` with width `k`, register `c` holding 0.25 / k; `min`'s
+    /// operands in the order `op` names.
+    pub(crate) fn smooth_union(&mut self, op: FoldOp, out: u32, a: u32, b: u32, c: u32, k: T) {
+        let code = match op {
+            FoldOp::SmoothUnionAB => Code::SmoothUnionAB,
+            FoldOp::SmoothUnionBA => Code::SmoothUnionBA,
+            _ => unreachable!("a smooth union"),
+        };
+        debug_assert!(out != a && out != b && out != c);
+        self.prog.ops.push(Op {
+            code,
+            out,
+            a,
+            b,
+            c,
+            imm: k,
+        });
+        self.prog.regs = self.prog.regs.max(out.max(a).max(b).max(c) as usize + 1);
     }
 
     /// The program, its result in register `output`.
@@ -546,6 +565,25 @@ impl<T: Num> Program<T> {
                     Code::Fill => {
                         let o = out(op.out);
                         o[..w].fill(op.imm);
+                    }
+                    Code::SmoothUnionAB | Code::SmoothUnionBA => {
+                        let (o, a, b, c) = (out(op.out), blk(op.a), blk(op.b), blk(op.c));
+                        let (k, zero) = (op.imm, T::from_f64(0.0));
+                        let ab = op.code == Code::SmoothUnionAB;
+                        for l in 0..w {
+                            let d = T::binary(BinOp::Sub, a[l], b[l]);
+                            let ad = T::unary(UnOp::Abs, d);
+                            let kd = T::binary(BinOp::Sub, k, ad);
+                            let h = T::binary(BinOp::Max, kd, zero);
+                            let h2 = T::unary(UnOp::Square, h);
+                            let corr = T::binary(BinOp::Mul, h2, c[l]);
+                            let m = if ab {
+                                T::binary(BinOp::Min, a[l], b[l])
+                            } else {
+                                T::binary(BinOp::Min, b[l], a[l])
+                            };
+                            o[l] = T::binary(BinOp::Sub, m, corr);
+                        }
                     }
                 }
             }
