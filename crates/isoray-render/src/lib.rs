@@ -749,7 +749,7 @@ impl<'s> Worker<'s> {
         let vars: &'s [f64] = &ctx.scene.inputs;
         let objects = (ctx.scene.objects.len() > 1).then(|| {
             let tapes = ctx.scene.objects.iter().map(|o| o.shape.tape()).collect();
-            objects::Objects::new(tapes, vars)
+            objects::Objects::new(tapes, vars, &ctx.object_spheres)
         });
         let field = |tape: &'s isoray_shape::Tape| match ctx.domain {
             Some((center, half)) => Field::pruned(tape, vars, center, half),

@@ -61,6 +61,9 @@ pub(crate) struct Objects<'s> {
     tapes: Vec<&'s Tape>,
     fields: Vec<Field<'s>>,
     bounds: Vec<IntervalEvaluator<'s>>,
+    /// Per object, the sphere its distance is, when it is (bounded in
+    /// closed form; may be empty: none).
+    spheres: Vec<Option<([f64; 3], f64)>>,
     /// Scratch: a box's points and the fold's state at them.
     gx: Vec<f32>,
     gy: Vec<f32>,
@@ -73,9 +76,12 @@ pub(crate) struct Objects<'s> {
 }
 
 impl<'s> Objects<'s> {
-    /// The objects of the given tapes, with the inputs `vars`.
-    pub(crate) fn new(tapes: Vec<&'s Tape>, vars: &'s [f64]) -> Self {
+    /// The objects of the given tapes, with the inputs `vars` (and
+    /// `spheres`, per object the sphere its distance is when it is, or
+    /// nothing).
+    pub(crate) fn new(tapes: Vec<&'s Tape>, vars: &'s [f64], spheres: &[Option<([f64; 3], f64)>]) -> Self {
         Objects {
+            spheres: spheres.to_vec(),
             fields: tapes.iter().map(|t| Field::new(t, vars)).collect(),
             bounds: tapes.iter().map(|t| IntervalEvaluator::new(t, vars)).collect(),
             tapes,
@@ -184,7 +190,10 @@ impl<'s> Objects<'s> {
         let mut kept: Vec<u32> = Vec::new();
         let (mut acc, mut best) = (Interval::point(0.0), Interval::point(0.0));
         for &j in candidates {
-            let mut iv = self.bounds[j as usize].eval(self.tapes[j as usize], bx, None);
+            let mut iv = match self.spheres.get(j as usize).copied().flatten() {
+                Some((c, r)) => isoray_shape::fold::sphere_bound(c, r, bx),
+                None => self.bounds[j as usize].eval(self.tapes[j as usize], bx, None),
+            };
             if fold.unsigned {
                 iv = Interval::unary(UnOp::Abs, iv);
             }
@@ -316,7 +325,8 @@ mod tests {
 
     /// With bounds culling the objects, the fold is the literal one bit for
     /// bit, blended, plain and unsigned, at points near surfaces (where
-    /// blends mix) and far from them; and it evaluates far fewer objects.
+    /// blends mix) and far from them, with the spheres bounded by their
+    /// tapes or in closed form; and it evaluates far fewer objects.
     #[test]
     fn culled_fold_equals_the_literal_one() {
         let lib = isoray_shape::Library::new();
@@ -347,56 +357,68 @@ mod tests {
                 s
             })
             .collect();
-        let mut objects = Objects::new(tapes.clone(), &[]);
-        let folds = [
-            Fold {
-                k: 0.5,
-                km: 0.15,
-                unsigned: false,
-            },
-            Fold {
-                k: 0.0,
-                km: 0.0,
-                unsigned: false,
-            },
-            Fold {
-                k: 0.0,
-                km: 0.0,
-                unsigned: true,
-            },
-        ];
-        let mut evaluated = 0;
-        let mut points = 0;
-        for fold in folds {
-            for round in 0..8 {
-                // A packet's hits: clustered, or spread over the scene.
-                let (c, r) = if round % 2 == 0 {
-                    ([rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0], 0.6)
-                } else {
-                    ([0.0; 3], 5.0)
-                };
-                let n = 256;
-                let p: [Vec<f32>; 3] =
-                    std::array::from_fn(|k| (0..n).map(|_| c[k] + (rnd() * 2.0 - 1.0) * r).collect());
-                let (want, want_obj) = literal(&tapes, &surfaces, fold, [&p[0], &p[1], &p[2]]);
-                let mut got = vec![surfaces[0]; n];
-                let mut got_obj = vec![0; n];
-                evaluated += objects.fold(&surfaces, fold, &p[0], &p[1], &p[2], &mut got, &mut got_obj);
-                points += n;
-                assert_eq!(got_obj, want_obj);
-                for q in 0..n {
-                    assert_eq!(
-                        format!("{:?}", got[q]),
-                        format!("{:?}", want[q]),
-                        "point {q} of {fold:?}"
-                    );
+        // The spheres bounded in closed form (the renderer's way when it
+        // recognises them), the boxes by their tapes.
+        let spheres: Vec<Option<([f64; 3], f64)>> = shapes
+            .iter()
+            .map(|s| match isoray_scene::analytic::Analytic::recognise(s, &[]) {
+                Some(isoray_scene::analytic::Analytic::Sphere { c, r }) => Some((c, r)),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(spheres.iter().flatten().count(), 133);
+        for closed in [false, true] {
+            let mut objects = Objects::new(tapes.clone(), &[], if closed { &spheres } else { &[] });
+            let folds = [
+                Fold {
+                    k: 0.5,
+                    km: 0.15,
+                    unsigned: false,
+                },
+                Fold {
+                    k: 0.0,
+                    km: 0.0,
+                    unsigned: false,
+                },
+                Fold {
+                    k: 0.0,
+                    km: 0.0,
+                    unsigned: true,
+                },
+            ];
+            let mut evaluated = 0;
+            let mut points = 0;
+            for fold in folds {
+                for round in 0..8 {
+                    // A packet's hits: clustered, or spread over the scene.
+                    let (c, r) = if round % 2 == 0 {
+                        ([rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0], 0.6)
+                    } else {
+                        ([0.0; 3], 5.0)
+                    };
+                    let n = 256;
+                    let p: [Vec<f32>; 3] =
+                        std::array::from_fn(|k| (0..n).map(|_| c[k] + (rnd() * 2.0 - 1.0) * r).collect());
+                    let (want, want_obj) = literal(&tapes, &surfaces, fold, [&p[0], &p[1], &p[2]]);
+                    let mut got = vec![surfaces[0]; n];
+                    let mut got_obj = vec![0; n];
+                    evaluated += objects.fold(&surfaces, fold, &p[0], &p[1], &p[2], &mut got, &mut got_obj);
+                    points += n;
+                    assert_eq!(got_obj, want_obj);
+                    for q in 0..n {
+                        assert_eq!(
+                            format!("{:?}", got[q]),
+                            format!("{:?}", want[q]),
+                            "point {q} of {fold:?}"
+                        );
+                    }
                 }
             }
+            let literal = (points * tapes.len()) as u64;
+            assert!(
+                evaluated * 3 < literal,
+                "{evaluated} object evaluations, {literal} literally"
+            );
         }
-        let literal = (points * tapes.len()) as u64;
-        assert!(
-            evaluated * 3 < literal,
-            "{evaluated} object evaluations, {literal} literally"
-        );
     }
 }

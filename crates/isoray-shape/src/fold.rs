@@ -263,7 +263,7 @@ impl<'t> Fold<'t> {
 /// Bounds of |p − c| − r over the box: the distances from c to the box's
 /// nearest and furthest points, padded for rounding (and for the centre
 /// and radius being recognised, to ~1e-9, rather than read).
-fn sphere_bound(c: [f64; 3], r: f64, bx: [Interval; 3]) -> Interval {
+pub fn sphere_bound(c: [f64; 3], r: f64, bx: [Interval; 3]) -> Interval {
     let (mut near, mut far) = (0.0f64, 0.0f64);
     for k in 0..3 {
         let (lo, hi) = (bx[k].lo - c[k], bx[k].hi - c[k]);
