@@ -61,6 +61,11 @@ enum Code {
     /// as the tape's in the same order.
     SmoothUnionAB,
     SmoothUnionBA,
+    /// The ten operations of a sphere's distance from the point in
+    /// registers a, b, c: √((Δx² + Δy²) + Δz²) − imm, Δ = coordinate −
+    /// centre (`data[d..d + 3]`), each the same operation as the tape's in
+    /// the same order.
+    Sphere,
 }
 
 /// One instruction of a [`Program`].
@@ -72,6 +77,8 @@ struct Op<T> {
     b: u32,
     c: u32,
     imm: T,
+    /// `Sphere`: the index of its centre's three coordinates in `data`.
+    d: u32,
 }
 
 /// A tape compiled for [`crate::BatchEvaluator`] (see the module docs).
@@ -85,6 +92,8 @@ pub(crate) struct Program<T> {
     pub(crate) loads: Vec<(u32, u32)>,
     /// The register holding the result.
     pub(crate) output: u32,
+    /// Operands of fused operations (a sphere's centre).
+    data: Vec<T>,
 }
 
 /// What the compiler knows of a tape's slots (shared by its rewrites).
@@ -206,6 +215,7 @@ impl Compiler {
                 b: NONE,
                 c: NONE,
                 imm: zero,
+                d: 0,
             };
             match *ins {
                 Instr::Unary { op: u, a, .. } => {
@@ -319,6 +329,7 @@ impl Compiler {
             regs: regs as usize,
             loads,
             output,
+            data: Vec::new(),
         }
     }
 }
@@ -354,6 +365,7 @@ impl<T: Num> Assembler<T> {
                 regs: 3,
                 loads: Vec::new(),
                 output: 0,
+                data: Vec::new(),
             },
         }
     }
@@ -365,6 +377,22 @@ impl<T: Num> Assembler<T> {
     /// holding its result.
     pub(crate) fn append(&mut self, p: &Program<T>, values: &[T], base: u32) -> u32 {
         let map = |r: u32| if r < 3 || r == NONE { r } else { r - 3 + base };
+        if let Some((x, y, z, c, r)) = p.sphere() {
+            // One operation for the whole program.
+            let out = base;
+            self.prog.ops.push(Op {
+                code: Code::Sphere,
+                out,
+                a: x,
+                b: y,
+                c: z,
+                imm: r,
+                d: self.prog.data.len() as u32,
+            });
+            self.prog.data.extend(c);
+            self.prog.regs = self.prog.regs.max(out as usize + 1);
+            return out;
+        }
         for &(s, r) in &p.loads {
             self.prog.ops.push(Op {
                 code: Code::Fill,
@@ -373,6 +401,7 @@ impl<T: Num> Assembler<T> {
                 b: NONE,
                 c: NONE,
                 imm: values[s as usize],
+                d: 0,
             });
         }
         for op in &p.ops {
@@ -406,6 +435,7 @@ impl<T: Num> Assembler<T> {
             b,
             c: NONE,
             imm,
+            d: 0,
         });
         let top = [out, a, b].into_iter().filter(|&r| r != NONE).max().unwrap_or(0);
         self.prog.regs = self.prog.regs.max(top as usize + 1);
@@ -428,6 +458,7 @@ impl<T: Num> Assembler<T> {
             b,
             c,
             imm: k,
+            d: 0,
         });
         self.prog.regs = self.prog.regs.max(out.max(a).max(b).max(c) as usize + 1);
     }
@@ -441,6 +472,51 @@ impl<T: Num> Assembler<T> {
 }
 
 impl<T: Num> Program<T> {
+    /// When the whole program is a sphere's distance from the point
+    /// (x, y, z), compiled as `sphere(p - vec3(c), r)` is: the point's
+    /// registers, the centre and the radius.
+    fn sphere(&self) -> Option<(u32, u32, u32, [T; 3], T)> {
+        let ops = &self.ops;
+        if ops.len() != 10 || !self.loads.is_empty() {
+            return None;
+        }
+        // Which op's value each register holds as the ops run (registers
+        // are reused once read for the last time), and what each op reads.
+        let mut holds: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
+        let mut reads: Vec<[Option<usize>; 2]> = Vec::with_capacity(10);
+        for (i, op) in ops.iter().enumerate() {
+            let src = |r: u32| -> Option<usize> {
+                if r < 3 {
+                    Some(100 + r as usize)
+                } else {
+                    holds.get(&r).copied()
+                }
+            };
+            let b = matches!(op.code, Code::Add).then(|| src(op.b)).flatten();
+            reads.push([src(op.a), b]);
+            holds.insert(op.out, i);
+        }
+        let want: [(Code, [Option<usize>; 2]); 10] = [
+            (Code::SubI, [Some(100), None]),
+            (Code::SubI, [Some(101), None]),
+            (Code::SubI, [Some(102), None]),
+            (Code::Square, [Some(0), None]),
+            (Code::Square, [Some(1), None]),
+            (Code::Add, [Some(3), Some(4)]),
+            (Code::Square, [Some(2), None]),
+            (Code::Add, [Some(5), Some(6)]),
+            (Code::Sqrt, [Some(7), None]),
+            (Code::SubI, [Some(8), None]),
+        ];
+        let ok = ops
+            .iter()
+            .zip(&reads)
+            .zip(&want)
+            .all(|((op, r), (code, w))| op.code == *code && r == w)
+            && holds.get(&self.output) == Some(&9);
+        ok.then(|| (0, 1, 2, [ops[0].imm, ops[1].imm, ops[2].imm], ops[9].imm))
+    }
+
     /// Instructions per point.
     pub(crate) fn len(&self) -> usize {
         self.ops.len()
@@ -566,6 +642,19 @@ impl<T: Num> Program<T> {
                         let o = out(op.out);
                         o[..w].fill(op.imm);
                     }
+                    Code::Sphere => {
+                        let (o, x, y, z) = (out(op.out), blk(op.a), blk(op.b), blk(op.c));
+                        let d = op.d as usize;
+                        let (cx, cy, cz, r) = (self.data[d], self.data[d + 1], self.data[d + 2], op.imm);
+                        for l in 0..w {
+                            let dx = T::binary(BinOp::Sub, x[l], cx);
+                            let dy = T::binary(BinOp::Sub, y[l], cy);
+                            let dz = T::binary(BinOp::Sub, z[l], cz);
+                            let s = T::binary(BinOp::Add, T::unary(UnOp::Square, dx), T::unary(UnOp::Square, dy));
+                            let s = T::binary(BinOp::Add, s, T::unary(UnOp::Square, dz));
+                            o[l] = T::binary(BinOp::Sub, T::unary(UnOp::Sqrt, s), r);
+                        }
+                    }
                     Code::SmoothUnionAB | Code::SmoothUnionBA => {
                         let (o, a, b, c) = (out(op.out), blk(op.a), blk(op.b), blk(op.c));
                         let (k, zero) = (op.imm, T::from_f64(0.0));
@@ -653,6 +742,47 @@ mod tests {
                         assert_eq!(out[i].to_bits(), want.to_bits(), "{src}: point {p:?} of {n}");
                     }
                 }
+            }
+        }
+    }
+
+    /// A sphere's program joins an assembled one as a single operation
+    /// with the same values; other programs are copied as they are.
+    #[test]
+    fn spheres_run_as_one_operation() {
+        let lib = Library::new();
+        let mut seed = 17u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            ((seed % 1_000_000) as f64 / 1_000_000.0 * 8.0 - 4.0) as f32
+        };
+        for (src, fused) in [
+            ("sphere(p - vec3(1.0, -2.0, 0.37), 0.22)", true),
+            ("length(p - vec3(0.5, 0.25, -3.0)) - 1.5", true),
+            ("sphere(p * 2.0, 1.0)", false),
+            ("box(p, vec3(0.5))", false),
+        ] {
+            let sh = compile(&lib, src).unwrap();
+            let t = sh.tape();
+            let slots = super::Slots::<f32>::of(t);
+            let prog = super::Compiler::default().compile(t, &slots);
+            let mut values = vec![0.0f32; t.slots()];
+            for &(s, v) in t.constants() {
+                values[s as usize] = v as f32;
+            }
+            let mut asm = super::Assembler::<f32>::new();
+            let out = asm.append(&prog, &values, 3);
+            let joined = asm.finish(out);
+            assert_eq!(joined.len() == 1, fused, "{src}: {} operations", joined.len());
+            let n = 200;
+            let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rnd()).collect());
+            let (mut a, mut b) = (vec![0.0f32; n], vec![0.0f32; n]);
+            joined.eval(&mut Vec::new(), &[], &p[0], &p[1], &p[2], &mut a);
+            prog.eval(&mut Vec::new(), &values, &p[0], &p[1], &p[2], &mut b);
+            for i in 0..n {
+                assert_eq!(a[i].to_bits(), b[i].to_bits(), "{src} at point {i}");
             }
         }
     }
