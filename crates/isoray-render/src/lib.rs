@@ -607,10 +607,8 @@ impl<'s> Ctx<'s> {
             } else {
                 1.0
             };
-        // Not in the steps view, which shows the march as it is without
-        // them (as it does without closed forms).
-        // When every object is a sphere, the scene's reach (and the
-        // penumbra's, of the same field) is a union of balls' boxes.
+        // The objects that are spheres. When all are, the scene's reach
+        // (and the penumbra's, of the same field) is a union of balls' boxes.
         let object_spheres: Vec<Option<([f64; 3], f64)>> = if domain.is_some() && scene.objects.len() > 1 {
             scene
                 .objects
@@ -628,6 +626,8 @@ impl<'s> Ctx<'s> {
             .copied()
             .collect::<Option<Vec<_>>>()
             .filter(|s| !s.is_empty());
+        // Not in the steps view, which shows the march as it is without
+        // them (as it does without closed forms).
         let reach_above = |tape: &isoray_shape::Tape, above: f64| {
             let rays = rays.filter(|_| r.view != View::Steps)?;
             let (c, h) = domain?;

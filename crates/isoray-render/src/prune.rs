@@ -108,6 +108,8 @@ pub(crate) struct Pruner<'s> {
     /// Scratch: (cell << 32 | point) keys, and gathered points.
     keys: Vec<u64>,
     gather: [Vec<f32>; 7],
+    /// Scratch: a fold's finite-difference stencil points.
+    stencil: [Vec<f32>; 4],
     /// Tape instructions run, summed over points (for tests and stats).
     pub(crate) instrs_run: u64,
 }
@@ -163,6 +165,7 @@ impl<'s> Pruner<'s> {
             fold,
             keys: Vec::new(),
             gather: Default::default(),
+            stencil: Default::default(),
             instrs_run: 0,
         };
         let root = p.make_cell(FULL, center, half, 0);
@@ -200,7 +203,7 @@ impl<'s> Pruner<'s> {
     /// Instructions per point of the tape or fold cell `t`.
     fn len_of(&self, t: u32) -> usize {
         match &self.fold {
-            Some((_, cells)) => cells[if t == FULL { 0 } else { t as usize }].len(),
+            Some((_, cells)) => cells[fold_index(t)].len(),
             None => self.tape_of(t).len(),
         }
     }
@@ -209,16 +212,13 @@ impl<'s> Pruner<'s> {
     fn make_cell(&mut self, parent: u32, c: [f64; 3], h: f64, depth: u8) -> Cell {
         let bx = padded_cell(c, h);
         let tape = match &mut self.fold {
-            Some((fold, cells)) => {
-                let from = if parent == FULL { 0 } else { parent as usize };
-                match fold.specialise(&cells[from], bx) {
-                    Some(cell) => {
-                        cells.push(cell);
-                        cells.len() as u32 - 1
-                    }
-                    None => parent,
+            Some((fold, cells)) => match fold.specialise(&cells[fold_index(parent)], bx) {
+                Some(cell) => {
+                    cells.push(cell);
+                    cells.len() as u32 - 1
                 }
-            }
+                None => parent,
+            },
             None => {
                 let parent_tape = if parent == FULL {
                     self.tape
@@ -260,11 +260,8 @@ impl<'s> Pruner<'s> {
     ) {
         self.instrs_run += (xs.len() * self.len_of(t)) as u64;
         match &mut self.fold {
-            Some((fold, cells)) => fold.eval(&cells[if t == FULL { 0 } else { t as usize }], xs, ys, zs, out),
-            None => {
-                let tape = if t == FULL { self.tape } else { &self.tapes[t as usize] };
-                eval.eval_variant(tape, vars, xs, ys, zs, out);
-            }
+            Some((fold, cells)) => fold.eval(&cells[fold_index(t)], xs, ys, zs, out),
+            None => eval.eval_variant(self.tape_of(t), vars, xs, ys, zs, out),
         }
     }
 
@@ -492,7 +489,7 @@ impl<'s> Pruner<'s> {
 
     /// Finite-difference gradients at the points `p` with the tape or fold
     /// cell `t` (valid over the whole stencil): for a fold, the batch
-    /// evaluator's arithmetic step by step, so the same numbers.
+    /// evaluator's stencil over the fold's values, so the same numbers.
     fn gradients_of(
         &mut self,
         eval: &mut BatchEvaluator<'s, f32>,
@@ -502,49 +499,25 @@ impl<'s> Pruner<'s> {
         mode: GradientMode,
         g: [&mut [f32]; 3],
     ) {
+        let at = fold_index(t);
         let Some((fold, cells)) = &mut self.fold else {
-            let tape = if t == FULL { self.tape } else { &self.tapes[t as usize] };
             let [gx, gy, gz] = g;
+            let tape = self.tape_of(t);
             eval.gradients_variant(Some(tape), vars, p[0], p[1], p[2], mode, gx, gy, gz);
             return;
         };
-        let cell = &cells[if t == FULL { 0 } else { t as usize }];
-        let n = p
-            .iter()
-            .map(|v| v.len())
-            .chain(g.iter().map(|v| v.len()))
-            .min()
-            .unwrap_or(0);
-        let h = mode.step();
-        let inv_h = (1.0 / h) as f32;
-        for v in g.iter() {
-            debug_assert!(v.len() >= n);
-        }
-        let [gx, gy, gz] = g;
-        gx[..n].fill(0.0);
-        gy[..n].fill(0.0);
-        gz[..n].fill(0.0);
-        let mut s: [Vec<f32>; 4] = Default::default();
-        for v in s.iter_mut() {
-            v.resize(n, 0.0);
-        }
-        for (o, w) in isoray_shape::eval::stencil(mode) {
-            let off = [(h * o[0]) as f32, (h * o[1]) as f32, (h * o[2]) as f32];
-            for k in 0..3 {
-                for i in 0..n {
-                    s[k][i] = p[k][i] + off[k];
-                }
-            }
-            let [sx, sy, sz, sf] = &mut s;
-            fold.eval(cell, sx, sy, sz, sf);
-            let (wx, wy, wz) = (w[0] as f32, w[1] as f32, w[2] as f32);
-            for i in 0..n {
-                let f = sf[i] * inv_h;
-                gx[i] += wx * f;
-                gy[i] += wy * f;
-                gz[i] += wz * f;
-            }
-        }
+        let cell = &cells[at];
+        isoray_shape::eval::finite_differences(mode, p, g, &mut self.stencil, |x, y, z, f| fold.eval(cell, x, y, z, f));
+    }
+}
+
+/// The index in a fold's cells of the tape index `t` ([`FULL`]: the
+/// whole fold, cell 0).
+fn fold_index(t: u32) -> usize {
+    if t == FULL {
+        0
+    } else {
+        t as usize
     }
 }
 

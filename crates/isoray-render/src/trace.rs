@@ -34,7 +34,7 @@ impl<'s> Field<'s> {
     /// simplified for a region around it (the same values, bit for bit);
     /// as [`Field::new`] when the tape has nothing to simplify.
     pub fn pruned(tape: &'s Tape, vars: &'s [f64], center: [f64; 3], half: f64) -> Self {
-        let ok = prunable(tape) && half.is_finite() && half > 0.0 && center.iter().all(|c| c.is_finite());
+        let ok = can_prune(tape, center, half);
         Field {
             eval: BatchEvaluator::new(tape),
             vars,
@@ -61,7 +61,7 @@ impl<'s> Field<'s> {
         half: f64,
         probe: ([f64; 3], f64),
     ) -> Self {
-        let ok = prunable(tape) && half.is_finite() && half > 0.0 && center.iter().all(|c| c.is_finite());
+        let ok = can_prune(tape, center, half);
         let fold = ok
             .then(|| isoray_shape::fold::Fold::new(objects, spheres, k, vars, tape, probe.0, probe.1))
             .flatten();
@@ -109,6 +109,12 @@ impl<'s> Field<'s> {
             None => self.eval.gradients(self.vars, xs, ys, zs, mode, gx, gy, gz),
         }
     }
+}
+
+/// Whether `tape` is worth pruning over the cube of half-size `half`
+/// around `center` (a finite, non-empty one).
+fn can_prune(tape: &Tape, center: [f64; 3], half: f64) -> bool {
+    prunable(tape) && half.is_finite() && half > 0.0 && center.iter().all(|c| c.is_finite())
 }
 
 /// Scratch buffers reused across packets (no allocation per ray).

@@ -515,36 +515,66 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
             }
             return;
         }
-        let h = mode.step();
-        let inv_h = T::from_f64(1.0 / h);
-        gx[..n].fill(T::default());
-        gy[..n].fill(T::default());
-        gz[..n].fill(T::default());
         let mut scratch = std::mem::take(&mut self.scratch);
-        for s in scratch.iter_mut() {
-            s.resize(n, T::default());
-        }
-        for (o, w) in stencil(mode) {
-            let [sx, sy, sz, sf] = &mut scratch;
-            let (ox, oy, oz) = (T::from_f64(h * o[0]), T::from_f64(h * o[1]), T::from_f64(h * o[2]));
-            for i in 0..n {
-                sx[i] = xs[i] + ox;
-                sy[i] = ys[i] + oy;
-                sz[i] = zs[i] + oz;
-            }
-            match variant {
+        finite_differences(
+            mode,
+            [&xs[..n], &ys[..n], &zs[..n]],
+            [gx, gy, gz],
+            &mut scratch,
+            |sx, sy, sz, sf| match variant {
                 Some(v) => self.eval_variant(v, vars, sx, sy, sz, sf),
                 None => self.eval(vars, sx, sy, sz, sf),
-            }
-            let (wx, wy, wz) = (T::from_f64(w[0]), T::from_f64(w[1]), T::from_f64(w[2]));
-            for i in 0..n {
-                let f = sf[i] * inv_h;
-                gx[i] = gx[i] + wx * f;
-                gy[i] = gy[i] + wy * f;
-                gz[i] = gz[i] + wz * f;
-            }
-        }
+            },
+        );
         self.scratch = scratch;
+    }
+}
+
+/// Finite-difference gradients (a mode other than [`GradientMode::Dual`])
+/// at the points `p` into `g`, from the field `eval` writes at a batch of
+/// points (x, y, z slices into the last): the stencil's points one offset
+/// at a time in `scratch`, grad = Σ w·f(p + h·o)/h summed in the stencil's
+/// order. [`BatchEvaluator::gradients`] is this with its own tape; a
+/// caller whose field gives the tape's values bit for bit gets its
+/// gradients bit for bit.
+pub fn finite_differences<T: BatchNum>(
+    mode: GradientMode,
+    p: [&[T]; 3],
+    g: [&mut [T]; 3],
+    scratch: &mut [Vec<T>; 4],
+    mut eval: impl FnMut(&[T], &[T], &[T], &mut [T]),
+) {
+    let n = p
+        .iter()
+        .map(|v| v.len())
+        .chain(g.iter().map(|v| v.len()))
+        .min()
+        .unwrap_or(0);
+    let [gx, gy, gz] = g;
+    let h = mode.step();
+    let inv_h = T::from_f64(1.0 / h);
+    gx[..n].fill(T::default());
+    gy[..n].fill(T::default());
+    gz[..n].fill(T::default());
+    for s in scratch.iter_mut() {
+        s.resize(n, T::default());
+    }
+    for (o, w) in stencil(mode) {
+        let [sx, sy, sz, sf] = &mut *scratch;
+        let (ox, oy, oz) = (T::from_f64(h * o[0]), T::from_f64(h * o[1]), T::from_f64(h * o[2]));
+        for i in 0..n {
+            sx[i] = p[0][i] + ox;
+            sy[i] = p[1][i] + oy;
+            sz[i] = p[2][i] + oz;
+        }
+        eval(&sx[..n], &sy[..n], &sz[..n], &mut sf[..n]);
+        let (wx, wy, wz) = (T::from_f64(w[0]), T::from_f64(w[1]), T::from_f64(w[2]));
+        for i in 0..n {
+            let f = sf[i] * inv_h;
+            gx[i] = gx[i] + wx * f;
+            gy[i] = gy[i] + wy * f;
+            gz[i] = gz[i] + wz * f;
+        }
     }
 }
 

@@ -38,9 +38,6 @@ pub struct Fold<'t> {
     parts: Vec<Part<'t>>,
     /// The smooth union's width (0: `min`).
     k: f64,
-    /// The first register of the objects' own (registers 3 and 4 hold the
-    /// fold so far, 5 the smooth union's 0.25 / k).
-    base: u32,
     regs: Vec<f32>,
 }
 
@@ -73,6 +70,8 @@ impl FoldCell {
 const ACC: u32 = 3;
 /// 0.25 / k, the smooth union's constant factor.
 const CORR: u32 = 5;
+/// The first register of the objects' own.
+const BASE: u32 = CORR + 1;
 
 impl<'t> Fold<'t> {
     /// The fold of the objects' `tapes` in order with width `k` (0: by
@@ -123,11 +122,9 @@ impl<'t> Fold<'t> {
                     .filter(|(c, r)| r.is_finite() && c.iter().all(|x| x.is_finite())),
             });
         }
-        let base = CORR + 1;
         let mut fold = Fold {
             parts,
             k,
-            base,
             regs: Vec::new(),
         };
         // The whole fold against the scene's tape.
@@ -176,7 +173,6 @@ impl<'t> Fold<'t> {
         let margin = |a: f64, b: f64| 1e-5 * (a.abs() + b.abs() + k + size);
         let mut kept: Vec<u32> = Vec::new();
         let mut acc: Option<Interval> = None;
-
         for &j in &cell.objects {
             let part = &mut self.parts[j as usize];
             let n = match part.sphere {
@@ -227,7 +223,7 @@ impl<'t> Fold<'t> {
         }
         for (i, &j) in objects.iter().enumerate() {
             let part = &self.parts[j as usize];
-            let n = a.append(&part.program, &part.values, self.base);
+            let n = a.append(&part.program, &part.values, BASE);
             if i == 0 {
                 a.op(FoldOp::Copy, acc, n, n, 0.0);
                 continue;
@@ -235,17 +231,13 @@ impl<'t> Fold<'t> {
             let next = if acc == ACC { ACC + 1 } else { ACC };
             // The scene's tape orders min's operands by node: the first
             // two objects as they come, later objects before the fold.
-            let (m0, m1) = if j == 1 { (acc, n) } else { (n, acc) };
+            let ab = j == 1;
             if k > 0.0 {
                 // One operation for the smooth union's eight (CORR holds
                 // 0.25 / k).
-                let op = if m0 == acc {
-                    FoldOp::SmoothUnionAB
-                } else {
-                    FoldOp::SmoothUnionBA
-                };
-                a.smooth_union(op, next, acc, n, CORR, kk);
+                a.smooth_union(ab, next, acc, n, CORR, kk);
             } else {
+                let (m0, m1) = if ab { (acc, n) } else { (n, acc) };
                 a.op(FoldOp::Min, next, m0, m1, 0.0);
             }
             acc = next;

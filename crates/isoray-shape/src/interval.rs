@@ -320,10 +320,10 @@ struct BlendTable {
 
 impl BlendTable {
     fn of(blends: &Blends) -> BlendTable {
-        let mut mins: Vec<u32> = (0..blends.role.len() as u32)
+        // Ascending, as the instructions come.
+        let mins: Vec<u32> = (0..blends.role.len() as u32)
             .filter(|&i| blends.role[i as usize] == 1)
             .collect();
-        mins.sort_unstable();
         let ends = (0..blends.role.len() as u32)
             .filter(|&i| blends.role[i as usize] == 2)
             .map(|i| {

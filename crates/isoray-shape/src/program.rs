@@ -94,6 +94,9 @@ pub(crate) struct Program<T> {
     pub(crate) output: u32,
     /// Operands of fused operations (a sphere's centre).
     data: Vec<T>,
+    /// When the whole program is a sphere's distance from the point: its
+    /// centre and radius (see [`Program::sphere_form`]).
+    sphere: Option<([T; 3], T)>,
 }
 
 /// What the compiler knows of a tape's slots (shared by its rewrites).
@@ -324,13 +327,16 @@ impl Compiler {
         } else {
             self.reg_of[o as usize]
         };
-        Program {
+        let mut prog = Program {
             ops,
             regs: regs as usize,
             loads,
             output,
             data: Vec::new(),
-        }
+            sphere: None,
+        };
+        prog.sphere = prog.sphere_form();
+        prog
     }
 }
 
@@ -343,11 +349,6 @@ pub(crate) enum FoldOp {
     Copy,
     /// `imm` into register a (out)
     Fill,
-    /// The smooth union of a and b with width imm and 0.25 / imm in
-    /// register c, min's operands as (a, b) or (b, a): see
-    /// [`Assembler::smooth_union`].
-    SmoothUnionAB,
-    SmoothUnionBA,
 }
 
 /// Puts a program together from several compiled ones and a few
@@ -366,6 +367,7 @@ impl<T: Num> Assembler<T> {
                 loads: Vec::new(),
                 output: 0,
                 data: Vec::new(),
+                sphere: None,
             },
         }
     }
@@ -377,15 +379,15 @@ impl<T: Num> Assembler<T> {
     /// holding its result.
     pub(crate) fn append(&mut self, p: &Program<T>, values: &[T], base: u32) -> u32 {
         let map = |r: u32| if r < 3 || r == NONE { r } else { r - 3 + base };
-        if let Some((x, y, z, c, r)) = p.sphere() {
+        if let Some((c, r)) = p.sphere {
             // One operation for the whole program.
             let out = base;
             self.prog.ops.push(Op {
                 code: Code::Sphere,
                 out,
-                a: x,
-                b: y,
-                c: z,
+                a: 0,
+                b: 1,
+                c: 2,
                 imm: r,
                 d: self.prog.data.len() as u32,
             });
@@ -424,7 +426,6 @@ impl<T: Num> Assembler<T> {
             FoldOp::Min => (Code::Min, b),
             FoldOp::Copy => (Code::Max, a),
             FoldOp::Fill => (Code::Fill, NONE),
-            FoldOp::SmoothUnionAB | FoldOp::SmoothUnionBA => unreachable!("see Assembler::smooth_union"),
         };
         let a = if code == Code::Fill { NONE } else { a };
         debug_assert!(out != a && out != b, "an operation never writes what it reads");
@@ -443,13 +444,9 @@ impl<T: Num> Assembler<T> {
 
     /// Appends `out` = the smooth union of the fold so far `a` and the
     /// object `b` with width `k`, register `c` holding 0.25 / k; `min`'s
-    /// operands in the order `op` names.
-    pub(crate) fn smooth_union(&mut self, op: FoldOp, out: u32, a: u32, b: u32, c: u32, k: T) {
-        let code = match op {
-            FoldOp::SmoothUnionAB => Code::SmoothUnionAB,
-            FoldOp::SmoothUnionBA => Code::SmoothUnionBA,
-            _ => unreachable!("a smooth union"),
-        };
+    /// operands as (a, b) when `ab`, else as (b, a).
+    pub(crate) fn smooth_union(&mut self, ab: bool, out: u32, a: u32, b: u32, c: u32, k: T) {
+        let code = if ab { Code::SmoothUnionAB } else { Code::SmoothUnionBA };
         debug_assert!(out != a && out != b && out != c);
         self.prog.ops.push(Op {
             code,
@@ -473,28 +470,22 @@ impl<T: Num> Assembler<T> {
 
 impl<T: Num> Program<T> {
     /// When the whole program is a sphere's distance from the point
-    /// (x, y, z), compiled as `sphere(p - vec3(c), r)` is: the point's
-    /// registers, the centre and the radius.
-    fn sphere(&self) -> Option<(u32, u32, u32, [T; 3], T)> {
+    /// (x, y, z), compiled as `sphere(p - vec3(c), r)` is: the centre and
+    /// the radius.
+    fn sphere_form(&self) -> Option<([T; 3], T)> {
         let ops = &self.ops;
         if ops.len() != 10 || !self.loads.is_empty() {
             return None;
         }
         // Which op's value each register holds as the ops run (registers
-        // are reused once read for the last time), and what each op reads.
-        let mut holds: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
-        let mut reads: Vec<[Option<usize>; 2]> = Vec::with_capacity(10);
+        // are reused once read for the last time; 100 + k: coordinate k),
+        // and what each op reads.
+        let mut holds: Vec<Option<usize>> = (0..self.regs).map(|r| (r < 3).then_some(100 + r)).collect();
+        let mut reads = [[None; 2]; 10];
         for (i, op) in ops.iter().enumerate() {
-            let src = |r: u32| -> Option<usize> {
-                if r < 3 {
-                    Some(100 + r as usize)
-                } else {
-                    holds.get(&r).copied()
-                }
-            };
-            let b = matches!(op.code, Code::Add).then(|| src(op.b)).flatten();
-            reads.push([src(op.a), b]);
-            holds.insert(op.out, i);
+            let src = |r: u32| holds.get(r as usize).copied().flatten();
+            reads[i] = [src(op.a), (op.code == Code::Add).then(|| src(op.b)).flatten()];
+            *holds.get_mut(op.out as usize)? = Some(i);
         }
         let want: [(Code, [Option<usize>; 2]); 10] = [
             (Code::SubI, [Some(100), None]),
@@ -513,8 +504,8 @@ impl<T: Num> Program<T> {
             .zip(&reads)
             .zip(&want)
             .all(|((op, r), (code, w))| op.code == *code && r == w)
-            && holds.get(&self.output) == Some(&9);
-        ok.then(|| (0, 1, 2, [ops[0].imm, ops[1].imm, ops[2].imm], ops[9].imm))
+            && holds.get(self.output as usize).copied().flatten() == Some(9);
+        ok.then(|| ([ops[0].imm, ops[1].imm, ops[2].imm], ops[9].imm))
     }
 
     /// Instructions per point.
@@ -552,7 +543,7 @@ impl<T: Num> Program<T> {
     /// Runs the program over the first `m` ≤ [`LANES`] lanes of `regs`
     /// (one block of [`LANES`] values per register; x, y, z and the loads
     /// already in place).
-    pub(crate) fn run(&self, regs: &mut [T], m: usize) {
+    fn run(&self, regs: &mut [T], m: usize) {
         assert!(m <= LANES && regs.len() >= self.regs * LANES);
         // The arithmetic runs over whole groups of 8 lanes (the lanes past
         // `m` hold whatever they held: nothing reads them).
