@@ -16,8 +16,6 @@
 //! it reads changed, so moving a slider costs nothing but the new points.
 //! A tape that reads no input ignores `vars` (pass `&[]`).
 
-use std::collections::HashMap;
-
 use crate::ir::{apply_binary, apply_unary, BinOp, InputCache, Instr, Tape, UnOp};
 use crate::program::{Compiler, Program, Slots};
 
@@ -367,7 +365,7 @@ pub struct BatchEvaluator<'t, T: BatchNum> {
     /// What the compiler knows of the tape's slots.
     slot_info: Slots<T>,
     /// The tape and its rewrites compiled, by [`Tape::id`].
-    programs: HashMap<u64, Program<T>>,
+    programs: rustc_hash::FxHashMap<u64, Program<T>>,
     compiler: Compiler,
     /// The programs' registers, [`LANES`] values each.
     regs: Vec<T>,
@@ -389,7 +387,7 @@ impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
             tape,
             values,
             slot_info: Slots::of(tape),
-            programs: HashMap::new(),
+            programs: rustc_hash::FxHashMap::default(),
             compiler: Compiler::default(),
             regs: Vec::new(),
             inputs: InputCache::default(),

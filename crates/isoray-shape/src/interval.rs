@@ -5,8 +5,6 @@
 //! absorb rounding). Used for guaranteed distance bounds (Lipschitz bounds
 //! over a ball) and for skipping empty space.
 
-use std::collections::HashMap;
-
 use crate::ir::{BinOp, Instr, Tape, UnOp};
 
 /// A closed interval [lo, hi]; `lo > hi` never occurs. Infinite ends are allowed.
@@ -297,7 +295,7 @@ pub struct IntervalEvaluator<'t> {
     /// The smooth minimums of each tape evaluated so far, by [`Tape::id`]
     /// (a renderer evaluates each of its simplified tapes over up to eight
     /// boxes, its cells' children, at different times).
-    tables: HashMap<u64, BlendTable>,
+    tables: rustc_hash::FxHashMap<u64, BlendTable>,
     /// The operands' bounds of each smooth minimum of the tape being
     /// evaluated, saved at its `min` for its last instruction.
     args: Vec<(Interval, Interval)>,
@@ -464,7 +462,7 @@ impl<'t> IntervalEvaluator<'t> {
         blends.find(tape.instrs(), &s);
         let table = BlendTable::of(&blends);
         let any_blends = !table.ends.is_empty();
-        let mut tables = HashMap::new();
+        let mut tables = rustc_hash::FxHashMap::default();
         tables.insert(tape.id(), table);
         IntervalEvaluator {
             tape,

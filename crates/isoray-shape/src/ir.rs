@@ -178,9 +178,11 @@ pub fn apply_binary<T: num_traits::Float>(op: BinOp, a: T, b: T) -> T {
 #[derive(Debug, Default, Clone)]
 pub struct Builder {
     ops: Vec<Op>,
-    dedup: HashMap<Key, Node>,
+    /// Each operation's node (hashed with FxHash: interning is most of
+    /// what building a large scene's graph costs).
+    dedup: rustc_hash::FxHashMap<Key, Node>,
     /// Selects whose `b` operand may be skipped (see [`Builder::lazy_select`]).
-    lazy: std::collections::HashSet<Node>,
+    lazy: rustc_hash::FxHashSet<Node>,
 }
 
 impl Builder {
@@ -743,36 +745,30 @@ impl Builder {
     /// builder holds (a scene builds every object's tape from one builder).
     pub fn tape(&self, output: Node) -> Tape {
         let n = output.0 as usize + 1;
-        let mut keep = Vec::new();
-        let mut seen = vec![false; n];
-        let mut stack = vec![output.0 as usize];
-        seen[output.0 as usize] = true;
-        while let Some(i) = stack.pop() {
-            keep.push(i);
-            let (ops, k) = operand_array(&self.ops[i]);
-            for m in &ops[..k] {
-                let m = m.0 as usize;
-                if !seen[m] {
-                    seen[m] = true;
-                    stack.push(m);
-                }
+        // The nodes `output` needs, found from the highest down (operands
+        // precede their users): no array of the builder's size.
+        let mut keep: Vec<u32> = Vec::new();
+        let mut pending = std::collections::BinaryHeap::from([output.0]);
+        while let Some(i) = pending.pop() {
+            if keep.last() == Some(&i) {
+                continue;
             }
+            keep.push(i);
+            let (ops, k) = operand_array(&self.ops[i as usize]);
+            pending.extend(ops[..k].iter().map(|m| m.0));
         }
         if keep.len() == n {
             return Tape::extract(&self.ops, &self.lazy, output);
         }
         // The needed nodes alone, in their order: the same tape.
-        keep.sort_unstable();
-        let mut map = vec![u32::MAX; n];
-        for (j, &i) in keep.iter().enumerate() {
-            map[i] = j as u32;
-        }
-        let ops: Vec<Op> = keep.iter().map(|&i| renamed(self.ops[i], &map)).collect();
+        keep.reverse();
+        let map = |m: Node| Node(keep.binary_search(&m.0).map_or(u32::MAX, |j| j as u32));
+        let ops: Vec<Op> = keep.iter().map(|&i| renamed(self.ops[i as usize], map)).collect();
         let lazy = (self.lazy.iter())
-            .filter(|l| (l.0 as usize) < n && map[l.0 as usize] != u32::MAX)
-            .map(|l| Node(map[l.0 as usize]))
+            .map(|&l| map(l))
+            .filter(|l| l.0 != u32::MAX)
             .collect();
-        Tape::extract(&ops, &lazy, Node(map[output.0 as usize]))
+        Tape::extract(&ops, &lazy, map(output))
     }
 }
 
@@ -796,9 +792,8 @@ fn operand_array(op: &Op) -> ([Node; 3], usize) {
     }
 }
 
-/// `op` with its operands renamed by `map`.
-fn renamed(op: Op, map: &[u32]) -> Op {
-    let m = |n: Node| Node(map[n.0 as usize]);
+/// `op` with its operands renamed by `m`.
+fn renamed(op: Op, m: impl Fn(Node) -> Node) -> Op {
     match op {
         Op::Unary(o, a) => Op::Unary(o, m(a)),
         Op::Binary(o, a, b) => Op::Binary(o, m(a), m(b)),
@@ -1096,7 +1091,7 @@ struct Frame {
 }
 
 impl Tape {
-    fn extract(ops: &[Op], lazy: &std::collections::HashSet<Node>, output: Node) -> Tape {
+    fn extract(ops: &[Op], lazy: &rustc_hash::FxHashSet<Node>, output: Node) -> Tape {
         let n = output.0 as usize + 1;
         let operands = |i: usize| {
             let (o, k) = operand_array(&ops[i]);
@@ -1771,6 +1766,19 @@ mod tests {
             assert_eq!(a.eval(&[], p[0], p[1], p[2]), b.eval(&[], p[0], p[1], p[2]));
         }
         assert!(many.tape(last).len() > 40 * taken.len());
+        // A lazy select keeps its skip when taken from among the others.
+        let lazy = |b: &mut Builder| {
+            let near = blob(b, 3.0);
+            let far = b.x();
+            let e = b.unary(UnOp::Sin, near);
+            b.lazy_select(far, near, e)
+        };
+        let lazy_node = lazy(&mut many);
+        let mut one = Builder::new();
+        let node = lazy(&mut one);
+        let skips = |t: &Tape| t.instrs().iter().filter(|i| matches!(i, Instr::Skip { .. })).count();
+        let (taken, alone) = (many.tape(lazy_node), one.tape(node));
+        assert_eq!((taken.len(), skips(&taken)), (alone.len(), 1));
     }
 
     /// Builds sphere(p - (k, 0, 0), r·2) + sin(t) with k, r inputs, or with

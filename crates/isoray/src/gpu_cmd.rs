@@ -53,15 +53,9 @@ impl GpuSession {
             kernel,
             ..Default::default()
         };
-        let result = std::thread::scope(|sc| {
-            let handle = sc.spawn(|| renderer.render(scene, &opts));
-            if !quiet {
-                let total = isoray_gpu::band_count(scene, kernel, aovs);
-                crate::show_progress(&handle, &progress, total, start);
-            }
-            handle.join()
-        })
-        .map_err(|_| io_failure("the GPU renderer failed unexpectedly".into()))?;
+        let total = || isoray_gpu::band_count(scene, kernel, aovs);
+        let result = crate::with_progress(quiet, &progress, total, start, || renderer.render(scene, &opts))
+            .map_err(|_| io_failure("the GPU renderer failed unexpectedly".into()))?;
         let (image, stats, t) = result.map_err(gpu_failure)?;
         if timing {
             let ms = |d: Duration| d.as_secs_f64() * 1e3;

@@ -955,13 +955,13 @@ fn render_region_cpu_with(
         cancel: Some(jobs::cancel_token()),
     };
     let start = Instant::now();
-    let result = std::thread::scope(|sc| {
-        let handle = sc.spawn(|| pool.install(|| isoray_render::render_region_image(scene, region, &opts)));
-        if !quiet {
-            show_progress(&handle, &progress, tile_count(scene), start);
-        }
-        handle.join()
-    })
+    let result = with_progress(
+        quiet,
+        &progress,
+        || tile_count(scene),
+        start,
+        || pool.install(|| isoray_render::render_region_image(scene, region, &opts)),
+    )
     .map_err(|_| io_failure("the renderer failed unexpectedly".into()))?;
     let Ok((image, stats)) = result else {
         return Err(jobs::cancelled());
@@ -1067,15 +1067,37 @@ fn cmd_render(input: &SceneArgs, overrides: &[String], outputs: &Outputs, how: &
     Ok(())
 }
 
-pub(crate) fn show_progress<T>(
-    handle: &std::thread::ScopedJoinHandle<'_, T>,
+/// Runs `work` on a thread of its own while this one shows a progress bar
+/// of `done` out of `total()` (unless `quiet`), and returns as soon as the
+/// work ends: the work tells this thread when it finishes, so a short job
+/// is not held up by the bar's polling interval (it was, by up to 50 ms).
+pub(crate) fn with_progress<T: Send>(
+    quiet: bool,
     done: &Counter,
-    total: usize,
+    total: impl FnOnce() -> usize,
     start: Instant,
-) {
+    work: impl FnOnce() -> T + Send,
+) -> std::thread::Result<T> {
+    let (finished, ended) = std::sync::mpsc::channel::<()>();
+    std::thread::scope(|sc| {
+        let handle = sc.spawn(move || {
+            let result = work();
+            // Nothing waits on it when the run is quiet.
+            let _ = finished.send(());
+            result
+        });
+        if !quiet {
+            show_progress(&ended, done, total(), start);
+        }
+        handle.join()
+    })
+}
+
+/// Shows a progress bar (after the first second, on a terminal) until the
+/// work sends on `ended` or drops its sender (it panicked).
+fn show_progress(ended: &std::sync::mpsc::Receiver<()>, done: &Counter, total: usize, start: Instant) {
     let mut bar: Option<indicatif::ProgressBar> = None;
-    while !handle.is_finished() {
-        std::thread::sleep(Duration::from_millis(50));
+    while let Err(std::sync::mpsc::RecvTimeoutError::Timeout) = ended.recv_timeout(Duration::from_millis(50)) {
         if bar.is_none() && start.elapsed() > Duration::from_secs(1) && std::io::stderr().is_terminal() {
             let b = indicatif::ProgressBar::new(total as u64);
             b.set_style(
