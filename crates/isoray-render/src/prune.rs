@@ -46,22 +46,34 @@ const NONE: u32 = u32::MAX;
 /// The full tape (a cell where nothing simplifies).
 const FULL: u32 = u32::MAX;
 
-/// A cell of the octree.
+/// The children of a leaf (a cell never divided).
+const LEAF: u32 = u32::MAX - 1;
+
+/// What finding a point's cell reads of each cell on the way down: its
+/// box and children, one cache line (the rest is in [`Cell`]).
+#[derive(Debug, Clone)]
+#[repr(C, align(64))]
+struct Node {
+    /// Its box: centre and half-size.
+    c: [f64; 3],
+    h: f64,
+    /// The eight children (x, y, z bits of the index: the upper half
+    /// along that axis), [`NONE`] until made; all [`LEAF`] for a leaf.
+    kids: [u32; 8],
+}
+
+/// A cell of the octree (its [`Node`] is at the same index).
 #[derive(Debug, Clone)]
 struct Cell {
     /// Index into `tapes`, or [`FULL`].
     tape: u32,
-    /// The eight children (x, y, z bits of the index: the upper half
-    /// along that axis), [`NONE`] until made; none for a leaf.
-    kids: Option<[u32; 8]>,
     /// Per child not made yet, the points this cell evaluated for want of
     /// it (see [`PATIENCE`]).
     visits: [u32; 8],
     /// The cell it divides ([`NONE`] for the root).
     parent: u32,
-    /// Its box: centre and half-size.
-    c: [f64; 3],
-    h: f64,
+    /// Its level below the domain cube (0: the root).
+    depth: u8,
 }
 
 /// Groups of fewer points than this go to the parent cell when its tape
@@ -96,10 +108,9 @@ pub(crate) struct Pruner<'s> {
     intervals: IntervalEvaluator<'s>,
     choices: Vec<Choice>,
     simplifier: Simplifier,
-    /// The domain cube.
-    center: [f64; 3],
-    half: f64,
+    /// The octree, root first (its box the domain cube).
     cells: Vec<Cell>,
+    nodes: Vec<Node>,
     tapes: Vec<Tape>,
     /// When the field is a fold of objects specialised object by object
     /// ([`isoray_shape::fold`]): the fold and its cells (index 0 the whole
@@ -158,9 +169,8 @@ impl<'s> Pruner<'s> {
             intervals: IntervalEvaluator::new(tape, vars),
             choices: Vec::new(),
             simplifier: Simplifier::default(),
-            center,
-            half,
             cells: Vec::new(),
+            nodes: Vec::new(),
             tapes: Vec::new(),
             fold,
             keys: Vec::new(),
@@ -168,8 +178,7 @@ impl<'s> Pruner<'s> {
             stencil: Default::default(),
             instrs_run: 0,
         };
-        let root = p.make_cell(FULL, center, half, 0);
-        p.cells.push(root);
+        p.make_cell(FULL, NONE, center, half, 0);
         p
     }
 
@@ -190,11 +199,6 @@ impl<'s> Pruner<'s> {
         }
     }
 
-    /// The depth of a cell, from its size.
-    fn depth_of(&self, cell: u32) -> u8 {
-        (self.half / self.cells[cell as usize].h).log2().round() as u8
-    }
-
     /// Whether cells are specialised object by object.
     pub(crate) fn by_objects(&self) -> bool {
         self.fold.is_some()
@@ -208,8 +212,10 @@ impl<'s> Pruner<'s> {
         }
     }
 
-    /// A cell of the given box and depth, its tape simplified from `parent`.
-    fn make_cell(&mut self, parent: u32, c: [f64; 3], h: f64, depth: u8) -> Cell {
+    /// Makes a cell of the given box and depth below `above` (a child of
+    /// it, or the root), its tape simplified from `parent`'s; returns its
+    /// index.
+    fn make_cell(&mut self, parent: u32, above: u32, c: [f64; 3], h: f64, depth: u8) -> u32 {
         let bx = padded_cell(c, h);
         let tape = match &mut self.fold {
             Some((fold, cells)) => match fold.specialise(&cells[fold_index(parent)], bx) {
@@ -236,14 +242,15 @@ impl<'s> Pruner<'s> {
             }
         };
         let leaf = depth >= MAX_DEPTH || self.len_of(tape) <= SHORT;
-        Cell {
+        self.cells.push(Cell {
             tape,
-            kids: (!leaf).then_some([NONE; 8]),
             visits: [0; 8],
-            parent: NONE,
-            c,
-            h,
-        }
+            parent: above,
+            depth,
+        });
+        let kids = [if leaf { LEAF } else { NONE }; 8];
+        self.nodes.push(Node { c, h, kids });
+        self.cells.len() as u32 - 1
     }
 
     /// Evaluates the points with the tape or fold cell `t`.
@@ -270,30 +277,35 @@ impl<'s> Pruner<'s> {
     /// root's tape holds only inside it).
     ///
     /// The descent starts at `hint` (the previous point's cell: points come
-    /// in runs along rays) when the cube around `p` lies strictly inside
-    /// it: the cells above it then lead to it, and no plane that divides
-    /// them passes within `margin` of `p`.
+    /// in runs along rays), or the nearest cell above it, that the cube
+    /// around `p` lies strictly inside: the cells above that one lead to
+    /// it, and no plane that divides them passes within `margin` of `p`.
     fn cell_of(&mut self, p: [f32; 3], margin: f64, hint: u32) -> u32 {
         let p = p.map(|x| x as f64);
         let within = |c: [f64; 3], h: f64| (0..3).all(|k| (p[k] - c[k]).abs() + margin < h);
-        let (mut cell, mut c, mut h) = (0u32, self.center, self.half);
-        if hint != NONE && hint != 0 {
-            let hc = &self.cells[hint as usize];
-            if within(hc.c, hc.h) {
-                (cell, c, h) = (hint, hc.c, hc.h);
+        // Up from the hint to the first cell that holds the cube: points
+        // mostly move on to a neighbouring cell, a level or two away.
+        let mut cell = if hint == NONE { 0 } else { hint };
+        while cell != 0 {
+            let n = &self.nodes[cell as usize];
+            if within(n.c, n.h) {
+                break;
             }
+            cell = self.cells[cell as usize].parent;
         }
+        let (mut c, mut h) = (self.nodes[cell as usize].c, self.nodes[cell as usize].h);
         if cell == 0 {
             let inside = |k: usize| (p[k] - c[k]).abs() + margin <= h;
             if !(inside(0) && inside(1) && inside(2)) {
                 return NONE;
             }
         }
-        let mut depth = self.depth_of(cell);
+        let mut depth = self.cells[cell as usize].depth;
         loop {
-            let Some(kids) = self.cells[cell as usize].kids else {
+            let kids = &self.nodes[cell as usize].kids;
+            if kids[0] == LEAF {
                 return cell;
-            };
+            }
             let h2 = 0.5 * h;
             let mut i = 0;
             let mut cc = c;
@@ -320,13 +332,8 @@ impl<'s> Pruner<'s> {
                     return cell;
                 }
                 let parent = self.cells[cell as usize].tape;
-                let mut made = self.make_cell(parent, cc, h2, depth);
-                made.parent = cell;
-                kid = self.cells.len() as u32;
-                self.cells.push(made);
-                if let Some(k) = &mut self.cells[cell as usize].kids {
-                    k[i] = kid;
-                }
+                kid = self.make_cell(parent, cell, cc, h2, depth);
+                self.nodes[cell as usize].kids[i] = kid;
             }
             (cell, c, h) = (kid, cc, h2);
         }

@@ -259,13 +259,9 @@ pub fn sphere_bound(c: [f64; 3], r: f64, bx: [Interval; 3]) -> Interval {
     let (mut near, mut far) = (0.0f64, 0.0f64);
     for k in 0..3 {
         let (lo, hi) = (bx[k].lo - c[k], bx[k].hi - c[k]);
-        let n = if lo > 0.0 {
-            lo
-        } else if hi < 0.0 {
-            -hi
-        } else {
-            0.0
-        };
+        // The gap to the box along this axis (0 when c is within it);
+        // without branches, which the descent cannot predict.
+        let n = lo.max(0.0) + (-hi).max(0.0);
         let f = lo.abs().max(hi.abs());
         near += n * n;
         far += f * f;

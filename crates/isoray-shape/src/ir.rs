@@ -753,6 +753,10 @@ impl Builder {
             if keep.last() == Some(&i) {
                 continue;
             }
+            if keep.len() > n / 8 {
+                // Most of the builder: straight from its nodes.
+                return self.tape_dense(output);
+            }
             keep.push(i);
             let (ops, k) = operand_array(&self.ops[i as usize]);
             pending.extend(ops[..k].iter().map(|m| m.0));
@@ -769,6 +773,45 @@ impl Builder {
             .filter(|l| l.0 != u32::MAX)
             .collect();
         Tape::extract(&ops, &lazy, map(output))
+    }
+}
+
+impl Builder {
+    /// [`Builder::tape`] for an output that needs much of the builder:
+    /// marks over arrays of its size.
+    fn tape_dense(&self, output: Node) -> Tape {
+        let n = output.0 as usize + 1;
+        let mut needed = vec![false; n];
+        needed[n - 1] = true;
+        for i in (0..n).rev() {
+            if needed[i] {
+                let (ops, k) = operand_array(&self.ops[i]);
+                for m in &ops[..k] {
+                    needed[m.0 as usize] = true;
+                }
+            }
+        }
+        let mut map = vec![u32::MAX; n];
+        let mut kept = 0u32;
+        for i in 0..n {
+            if needed[i] {
+                map[i] = kept;
+                kept += 1;
+            }
+        }
+        if kept as usize == n {
+            return Tape::extract(&self.ops, &self.lazy, output);
+        }
+        let rename = |m: Node| Node(map[m.0 as usize]);
+        let ops: Vec<Op> = (0..n)
+            .filter(|&i| needed[i])
+            .map(|i| renamed(self.ops[i], rename))
+            .collect();
+        let lazy = (self.lazy.iter())
+            .filter(|l| (l.0 as usize) < n && needed[l.0 as usize])
+            .map(|&l| rename(l))
+            .collect();
+        Tape::extract(&ops, &lazy, rename(output))
     }
 }
 
@@ -811,6 +854,12 @@ fn renamed(op: Op, m: impl Fn(Node) -> Node) -> Op {
 fn emit_scope(ops: &[Op], is_lazy: &dyn Fn(usize) -> bool, scope: &[usize], top: usize, order: &mut Vec<Emit>) {
     const OUTSIDE: usize = usize::MAX;
     const SHARED: usize = usize::MAX - 1;
+    if !scope.iter().any(|&i| is_lazy(i)) {
+        // No region to open: the scope's nodes in order (each is needed by
+        // `top`, through nodes of the scope).
+        order.extend(scope.iter().map(|&i| Emit::Node(i)));
+        return;
+    }
     let pos = |m: Node| scope.binary_search(&(m.0 as usize)).ok();
     let k = scope.len();
     // Nodes the scope computes always: reached from `top` without going
@@ -1277,10 +1326,12 @@ impl Tape {
             instrs.push(instr);
             // Free operands whose last use is this instruction (after choosing `out`,
             // so that no instruction writes a slot it reads).
-            let mut ops_i: Vec<Node> = operands(i).collect();
-            ops_i.sort();
-            ops_i.dedup();
-            for m in ops_i {
+            let (ops_i, k) = operand_array(&ops[i]);
+            for (j, m) in ops_i[..k].iter().enumerate() {
+                // Each operand once (an operation may read a node twice).
+                if ops_i[..j].contains(m) {
+                    continue;
+                }
                 if last_use[m.0 as usize] == pos && is_temp(m.0 as usize) {
                     free.push(slot_of[m.0 as usize]);
                 }

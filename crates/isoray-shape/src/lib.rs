@@ -38,6 +38,7 @@ pub use diag::{Diagnostic, SourceId, Span};
 pub use eval::{gradient, BatchEvaluator, Dual, DualBatch, GradientMode, PointEvaluator, LANES};
 pub use ir::{Builder, Node, Tape, TIME};
 pub use lower::{Analyses, Compiled, Library, Surface, SurfaceMode, GRADIENT_GUARD};
+pub use program::sphere_form;
 pub use types::{Type, Value};
 
 /// A compiled shape: the tape of one signed distance function.

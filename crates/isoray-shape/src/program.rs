@@ -340,6 +340,17 @@ impl Compiler {
     }
 }
 
+/// When `tape` is exactly a sphere's distance from the point, the ten
+/// operations `sphere(p - vec3(c), r)` compiles to with constant centre
+/// and radius: the centre and the radius, read from the tape (no sampling:
+/// the structure is the proof).
+pub fn sphere_form(tape: &Tape) -> Option<([f64; 3], f64)> {
+    if tape.len() != 10 || !tape.prologue().is_empty() {
+        return None;
+    }
+    Compiler::default().compile(tape, &Slots::<f64>::of(tape)).sphere
+}
+
 /// The operations [`Assembler::op`] appends (a fold's own arithmetic).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum FoldOp {
@@ -517,6 +528,19 @@ impl<T: Num> Program<T> {
     /// `out[i]`, block by block in `regs` (grown as needed), its loads
     /// taken from `values` (by slot).
     pub(crate) fn eval(&self, regs: &mut Vec<T>, values: &[T], xs: &[T], ys: &[T], zs: &[T], out: &mut [T]) {
+        self.eval_by(Self::run, regs, values, [xs, ys, zs], out);
+    }
+
+    /// [`Self::eval`] with `run` running the program over each block.
+    fn eval_by(
+        &self,
+        run: impl Fn(&Self, &mut [T], usize),
+        regs: &mut Vec<T>,
+        values: &[T],
+        p: [&[T]; 3],
+        out: &mut [T],
+    ) {
+        let [xs, ys, zs] = p;
         if regs.len() < self.regs * LANES {
             regs.resize(self.regs * LANES, T::from_f64(0.0));
         }
@@ -533,7 +557,7 @@ impl<T: Num> Program<T> {
                 let r = r as usize * LANES;
                 regs[r..r + w].fill(values[s as usize]);
             }
-            self.run(regs, m);
+            run(self, regs, m);
             let o = self.output as usize * LANES;
             out[i..i + m].copy_from_slice(&regs[o..o + m]);
             i += m;
@@ -544,6 +568,27 @@ impl<T: Num> Program<T> {
     /// (one block of [`LANES`] values per register; x, y, z and the loads
     /// already in place).
     fn run(&self, regs: &mut [T], m: usize) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.run_avx2(regs, m) };
+        }
+        self.run_any(regs, m)
+    }
+
+    /// [`Self::run`] compiled for AVX2: a block of 8 lanes is one
+    /// instruction per operation instead of two. The same IEEE operations
+    /// lane by lane (nothing is fused), so the same values bit for bit.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn run_avx2(&self, regs: &mut [T], m: usize) {
+        self.run_any(regs, m)
+    }
+
+    /// [`Self::run`] for whatever the build targets (inlined into the
+    /// variants compiled for wider vectors).
+    #[inline(always)]
+    fn run_any(&self, regs: &mut [T], m: usize) {
         assert!(m <= LANES && regs.len() >= self.regs * LANES);
         // The arithmetic runs over whole groups of 8 lanes (the lanes past
         // `m` hold whatever they held: nothing reads them).
@@ -775,6 +820,69 @@ mod tests {
             for i in 0..n {
                 assert_eq!(a[i].to_bits(), b[i].to_bits(), "{src} at point {i}");
             }
+        }
+    }
+
+    /// The program run as compiled for AVX2 (where the CPU has it) gives
+    /// the portable build's values bit for bit, transcendental functions,
+    /// selects and fused operations included.
+    #[test]
+    fn wide_vectors_change_no_value() {
+        let lib = Library::new();
+        let mut seed = 23u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            ((seed % 1_000_000) as f64 / 1_000_000.0 * 6.0 - 3.0) as f32
+        };
+        for src in [
+            "smooth_union(sphere(p - vec3(1.0, 0.0, 0.0), 0.5), torus(p, 0.6, 0.2), 0.3) + 0.1 * sin(7.0 * p.x)",
+            "min(box(p, vec3(0.5)) + 0.2 * step(0.3, p.y), pow(abs(p.z) + 0.1, 1.5) - exp(-p.x * p.x))",
+            "sphere(p - vec3(1.0, -2.0, 0.37), 0.22)",
+        ] {
+            let t = compile(&lib, src).unwrap().tape().clone();
+            let slots = super::Slots::<f32>::of(&t);
+            let prog = super::Compiler::default().compile(&t, &slots);
+            let mut values = vec![0.0f32; t.slots()];
+            for &(s, v) in t.constants() {
+                values[s as usize] = v as f32;
+            }
+            for n in [1usize, 7, 8, 9, 64, 100] {
+                let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rnd()).collect());
+                let (mut a, mut b) = (vec![0.0f32; n], vec![0.0f32; n]);
+                let ps = [&p[0][..], &p[1][..], &p[2][..]];
+                prog.eval_by(super::Program::run, &mut Vec::new(), &values, ps, &mut a);
+                prog.eval_by(super::Program::run_any, &mut Vec::new(), &values, ps, &mut b);
+                for i in 0..n {
+                    assert_eq!(a[i].to_bits(), b[i].to_bits(), "{src} at point {i} of {n}");
+                }
+            }
+        }
+    }
+
+    /// A sphere's tape is recognised from its operations, with its centre
+    /// and radius; anything else is not.
+    #[test]
+    fn sphere_forms_are_read_from_tapes() {
+        let lib = Library::new();
+        let form = |src: &str| super::sphere_form(compile(&lib, src).unwrap().tape());
+        assert_eq!(
+            form("sphere(p - vec3(1.0, -2.0, 0.375), 0.25)"),
+            Some(([1.0, -2.0, 0.375], 0.25))
+        );
+        assert_eq!(
+            form("length(p - vec3(0.5, 0.25, -3.0)) - 1.5"),
+            Some(([0.5, 0.25, -3.0], 1.5))
+        );
+        for other in [
+            "sphere(p - vec3(1.0, 2.0, 3.0), 0.25) + 0.0 * sin(p.x)",
+            "sphere(p * 2.0, 1.0)",
+            "length(p - vec3(1.0, 2.0, 3.0)) + 0.5",
+            "box(p - vec3(1.0, 2.0, 3.0), vec3(0.5))",
+            "sphere(p - vec3(1.0, 2.0, 3.0), 0.25 + 0.1 * t)",
+        ] {
+            assert_eq!(form(other), None, "{other}");
         }
     }
 
