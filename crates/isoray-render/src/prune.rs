@@ -26,7 +26,9 @@
 //! cell keeps the objects that can change the fold in its box, from
 //! interval bounds of each object's short tape, and runs them as one
 //! program — the same values, several times cheaper to make a cell for,
-//! so cells are made sooner ([`FOLD_PATIENCE`]).
+//! so cells are made sooner ([`FOLD_PATIENCE`]), and a sphere and its
+//! smooth union are one operation there, so leaves hold more objects
+//! ([`FOLD_SHORT`]).
 
 use isoray_shape::fold::{Fold, FoldCell};
 use isoray_shape::interval::{Choice, Interval, IntervalEvaluator};
@@ -39,6 +41,12 @@ pub const MAX_DEPTH: u8 = 10;
 
 /// Cells whose tape is at most this long are not divided further.
 pub const SHORT: usize = 24;
+
+/// [`SHORT`] for a fold specialised object by object, whose programs run
+/// a recognised sphere and its smooth union as one operation: leaves of up
+/// to about a hundred spheres (300 and 1,000 spheres 10–12 % faster than
+/// with 24; 1,000 tori or boxes, bounded by interval arithmetic, alike).
+pub const FOLD_SHORT: usize = 100;
 
 /// No cell (a child not made yet).
 const NONE: u32 = u32::MAX;
@@ -241,7 +249,8 @@ impl<'s> Pruner<'s> {
                 }
             }
         };
-        let leaf = depth >= MAX_DEPTH || self.len_of(tape) <= SHORT;
+        let short = if self.fold.is_some() { FOLD_SHORT } else { SHORT };
+        let leaf = depth >= MAX_DEPTH || self.len_of(tape) <= short;
         self.cells.push(Cell {
             tape,
             visits: [0; 8],

@@ -61,6 +61,10 @@ enum Code {
     /// as the tape's in the same order.
     SmoothUnionAB,
     SmoothUnionBA,
+    /// `SmoothUnionBA` of a and the sphere `Sphere` would have computed
+    /// into b (centre `data[d..d + 3]`, radius `data[d + 3]`, from the
+    /// point in registers 0, 1, 2): one operation per sphere of a fold.
+    SphereUnion,
     /// The ten operations of a sphere's distance from the point in
     /// registers a, b, c: √((Δx² + Δy²) + Δz²) − imm, Δ = coordinate −
     /// centre (`data[d..d + 3]`), each the same operation as the tape's in
@@ -459,6 +463,26 @@ impl<T: Num> Assembler<T> {
     pub(crate) fn smooth_union(&mut self, ab: bool, out: u32, a: u32, b: u32, c: u32, k: T) {
         let code = if ab { Code::SmoothUnionAB } else { Code::SmoothUnionBA };
         debug_assert!(out != a && out != b && out != c);
+        // A sphere just computed into b for this union alone: one operation
+        // for both (its centre's data are the last three values).
+        if let Some(last) = self.prog.ops.last_mut() {
+            let fresh = last.code == Code::Sphere && last.out == b && last.d as usize + 3 == self.prog.data.len();
+            if fresh && !ab && b != a && b != c {
+                let r = last.imm;
+                *last = Op {
+                    code: Code::SphereUnion,
+                    out,
+                    a,
+                    b: NONE,
+                    c,
+                    imm: k,
+                    d: last.d,
+                };
+                self.prog.data.push(r);
+                self.prog.regs = self.prog.regs.max(out.max(a).max(c) as usize + 1);
+                return;
+            }
+        }
         self.prog.ops.push(Op {
             code,
             out,
@@ -681,39 +705,63 @@ impl<T: Num> Program<T> {
                     Code::Sphere => {
                         let (o, x, y, z) = (out(op.out), blk(op.a), blk(op.b), blk(op.c));
                         let d = op.d as usize;
-                        let (cx, cy, cz, r) = (self.data[d], self.data[d + 1], self.data[d + 2], op.imm);
+                        let s = [self.data[d], self.data[d + 1], self.data[d + 2]];
                         for l in 0..w {
-                            let dx = T::binary(BinOp::Sub, x[l], cx);
-                            let dy = T::binary(BinOp::Sub, y[l], cy);
-                            let dz = T::binary(BinOp::Sub, z[l], cz);
-                            let s = T::binary(BinOp::Add, T::unary(UnOp::Square, dx), T::unary(UnOp::Square, dy));
-                            let s = T::binary(BinOp::Add, s, T::unary(UnOp::Square, dz));
-                            o[l] = T::binary(BinOp::Sub, T::unary(UnOp::Sqrt, s), r);
+                            o[l] = sphere(x[l], y[l], z[l], s, op.imm);
                         }
                     }
                     Code::SmoothUnionAB | Code::SmoothUnionBA => {
                         let (o, a, b, c) = (out(op.out), blk(op.a), blk(op.b), blk(op.c));
-                        let (k, zero) = (op.imm, T::from_f64(0.0));
                         let ab = op.code == Code::SmoothUnionAB;
                         for l in 0..w {
-                            let d = T::binary(BinOp::Sub, a[l], b[l]);
-                            let ad = T::unary(UnOp::Abs, d);
-                            let kd = T::binary(BinOp::Sub, k, ad);
-                            let h = T::binary(BinOp::Max, kd, zero);
-                            let h2 = T::unary(UnOp::Square, h);
-                            let corr = T::binary(BinOp::Mul, h2, c[l]);
-                            let m = if ab {
-                                T::binary(BinOp::Min, a[l], b[l])
-                            } else {
-                                T::binary(BinOp::Min, b[l], a[l])
-                            };
-                            o[l] = T::binary(BinOp::Sub, m, corr);
+                            o[l] = smooth_union(ab, a[l], b[l], op.imm, c[l]);
+                        }
+                    }
+                    Code::SphereUnion => {
+                        let (o, a, c) = (out(op.out), blk(op.a), blk(op.c));
+                        let (x, y, z) = (blk(0), blk(1), blk(2));
+                        let d = op.d as usize;
+                        let s = [self.data[d], self.data[d + 1], self.data[d + 2]];
+                        let r = self.data[d + 3];
+                        for l in 0..w {
+                            let b = sphere(x[l], y[l], z[l], s, r);
+                            o[l] = smooth_union(false, a[l], b, op.imm, c[l]);
                         }
                     }
                 }
             }
         }
     }
+}
+
+/// A sphere's distance from (x, y, z): the ten operations of
+/// `sphere(p - vec3(c), r)`'s tape, in its order.
+#[inline(always)]
+fn sphere<T: Num>(x: T, y: T, z: T, c: [T; 3], r: T) -> T {
+    let dx = T::binary(BinOp::Sub, x, c[0]);
+    let dy = T::binary(BinOp::Sub, y, c[1]);
+    let dz = T::binary(BinOp::Sub, z, c[2]);
+    let s = T::binary(BinOp::Add, T::unary(UnOp::Square, dx), T::unary(UnOp::Square, dy));
+    let s = T::binary(BinOp::Add, s, T::unary(UnOp::Square, dz));
+    T::binary(BinOp::Sub, T::unary(UnOp::Sqrt, s), r)
+}
+
+/// The eight operations of `Builder::smooth_union(a, b, k)` in its order,
+/// `c` = 0.25 / k; `min`'s operands as (a, b) when `ab`, else (b, a).
+#[inline(always)]
+fn smooth_union<T: Num>(ab: bool, a: T, b: T, k: T, c: T) -> T {
+    let d = T::binary(BinOp::Sub, a, b);
+    let ad = T::unary(UnOp::Abs, d);
+    let kd = T::binary(BinOp::Sub, k, ad);
+    let h = T::binary(BinOp::Max, kd, T::from_f64(0.0));
+    let h2 = T::unary(UnOp::Square, h);
+    let corr = T::binary(BinOp::Mul, h2, c);
+    let m = if ab {
+        T::binary(BinOp::Min, a, b)
+    } else {
+        T::binary(BinOp::Min, b, a)
+    };
+    T::binary(BinOp::Sub, m, corr)
 }
 
 #[cfg(test)]
