@@ -105,6 +105,11 @@ impl Analytic {
 
     /// Recognises a plane or a sphere, with the inputs `vars`.
     pub fn recognise(shape: &Shape, vars: &[f64]) -> Option<Analytic> {
+        // A tape that is a sphere's ten operations is that sphere, its
+        // centre and radius read from it exactly.
+        if let Some((c, r)) = isoray_shape::sphere_form(shape.tape()).filter(|&(_, r)| r > 0.0) {
+            return Some(Analytic::Sphere { c, r });
+        }
         let pts = probes();
         // One evaluator for the couple of hundred points.
         let mut eval = isoray_shape::PointEvaluator::<f64>::new(shape.tape());
@@ -119,17 +124,13 @@ impl Analytic {
                 d.is_finite() && (d - e).abs() <= 1e-9 * (1.0 + e.abs())
             })
         };
-        // A tape that is a sphere's ten operations needs no checking (the
-        // centre and radius are still found as for any other, the same
-        // numbers).
-        let proven = isoray_shape::sphere_form(shape.tape()).is_some_and(|(_, r)| r > 0.0);
         let g0 = shape.gradient_with(vars, pts[0], GradientMode::Dual);
         let d0 = shape.eval_with(vars, pts[0]);
         if !d0.is_finite() || !g0.iter().all(|x| x.is_finite()) {
             return None;
         }
         // Plane: n = ∇d, h = d − n·p.
-        if !proven && (len(g0) - 1.0).abs() < 1e-9 {
+        if (len(g0) - 1.0).abs() < 1e-9 {
             let plane = Analytic::Plane {
                 n: g0,
                 h: d0 - dot(g0, pts[0]),
@@ -151,7 +152,7 @@ impl Analytic {
             if r > 0.0 && r.is_finite() {
                 let c = [pts[0][0] - s * g0[0], pts[0][1] - s * g0[1], pts[0][2] - s * g0[2]];
                 let sphere = Analytic::Sphere { c, r };
-                if proven || matches(&sphere) {
+                if matches(&sphere) {
                     return Some(sphere);
                 }
             }
@@ -238,6 +239,24 @@ mod tests {
             rec("sphere(p - vec3(0.9, 5.3, -0.4), 0.16)"),
             Some(Analytic::Sphere { .. })
         ));
+        // A sphere's own tape is read, not fitted: exact however far the
+        // centre (a ground made of a huge ball is a common idiom, where
+        // fitting from probes near the origin loses digits).
+        for (text, c, r) in [
+            ("sphere(p - vec3(0.0, -1000.0, 0.0), 999.0)", [0.0, -1000.0, 0.0], 999.0),
+            ("sphere(p - vec3(3.0e6, 1.0, -2.0), 0.5)", [3.0e6, 1.0, -2.0], 0.5),
+        ] {
+            assert_eq!(rec(text), Some(Analytic::Sphere { c, r }), "{text}");
+        }
+        // Placed by inputs (not constants), it is still found by fitting.
+        let placed = compile(&Library::new(), "sphere(p - vec3(t, 0.5, 0.0), 0.25)").unwrap();
+        match Analytic::recognise(&placed, &[1.5]) {
+            Some(Analytic::Sphere { c, r }) => {
+                assert!((c[0] - 1.5).abs() < 1e-9 && (c[1] - 0.5).abs() < 1e-9 && c[2].abs() < 1e-9);
+                assert!((r - 0.25).abs() < 1e-9);
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]

@@ -68,7 +68,8 @@ enum Code {
     /// The ten operations of a sphere's distance from the point in
     /// registers a, b, c: √((Δx² + Δy²) + Δz²) − imm, Δ = coordinate −
     /// centre (`data[d..d + 3]`), each the same operation as the tape's in
-    /// the same order.
+    /// the same order (a tape without the subtraction of a centre
+    /// coordinate of 0 gives the same values: x − 0 is x).
     Sphere,
 }
 
@@ -344,12 +345,13 @@ impl Compiler {
     }
 }
 
-/// When `tape` is exactly a sphere's distance from the point, the ten
+/// When `tape` is exactly a sphere's distance from the point, the
 /// operations `sphere(p - vec3(c), r)` compiles to with constant centre
-/// and radius: the centre and the radius, read from the tape (no sampling:
-/// the structure is the proof).
+/// and radius (ten, fewer where a centre coordinate is 0): the centre and
+/// the radius, read from the tape (no sampling: the structure is the
+/// proof).
 pub fn sphere_form(tape: &Tape) -> Option<([f64; 3], f64)> {
-    if tape.len() != 10 || !tape.prologue().is_empty() {
+    if tape.len() > 10 || !tape.prologue().is_empty() {
         return None;
     }
     Compiler::default().compile(tape, &Slots::<f64>::of(tape)).sphere
@@ -505,42 +507,55 @@ impl<T: Num> Assembler<T> {
 
 impl<T: Num> Program<T> {
     /// When the whole program is a sphere's distance from the point
-    /// (x, y, z), compiled as `sphere(p - vec3(c), r)` is: the centre and
-    /// the radius.
+    /// (x, y, z), compiled as `sphere(p - vec3(c), r)` is — √((Δx² + Δy²) +
+    /// Δz²) − r, Δ = coordinate − centre, the subtraction absent for a
+    /// centre coordinate of 0 (x − 0 is x, bit for bit) — the centre and
+    /// the radius. Followed value by value through the registers, so their
+    /// reuse does not matter; the sums must be associated as written (the
+    /// fused operation adds in that order), either operand first.
     fn sphere_form(&self) -> Option<([T; 3], T)> {
-        let ops = &self.ops;
-        if ops.len() != 10 || !self.loads.is_empty() {
+        /// What a register holds.
+        #[derive(Clone, Copy)]
+        enum V<T> {
+            /// Coordinate k less a centre (None: nothing subtracted yet).
+            Delta(usize, Option<T>),
+            /// Its square.
+            Square(usize, T),
+            /// Δx² + Δy², then + Δz².
+            Sum2(T, T),
+            Sum3([T; 3]),
+            Root([T; 3]),
+            Distance([T; 3], T),
+        }
+        if self.ops.len() > 10 || !self.loads.is_empty() {
             return None;
         }
-        // Which op's value each register holds as the ops run (registers
-        // are reused once read for the last time; 100 + k: coordinate k),
-        // and what each op reads.
-        let mut holds: Vec<Option<usize>> = (0..self.regs).map(|r| (r < 3).then_some(100 + r)).collect();
-        let mut reads = [[None; 2]; 10];
-        for (i, op) in ops.iter().enumerate() {
-            let src = |r: u32| holds.get(r as usize).copied().flatten();
-            reads[i] = [src(op.a), (op.code == Code::Add).then(|| src(op.b)).flatten()];
-            *holds.get_mut(op.out as usize)? = Some(i);
+        let mut regs: Vec<Option<V<T>>> = (0..self.regs).map(|r| (r < 3).then_some(V::Delta(r, None))).collect();
+        let zero = T::from_f64(0.0);
+        for op in &self.ops {
+            let a = *regs.get(op.a as usize)?;
+            let v = match (op.code, a) {
+                (Code::SubI, Some(V::Delta(k, None))) => V::Delta(k, Some(op.imm)),
+                (Code::Square, Some(V::Delta(k, c))) => V::Square(k, c.unwrap_or(zero)),
+                (Code::Add, Some(x)) => match (x, *regs.get(op.b as usize)?) {
+                    (V::Square(0, cx), Some(V::Square(1, cy))) | (V::Square(1, cy), Some(V::Square(0, cx))) => {
+                        V::Sum2(cx, cy)
+                    }
+                    (V::Sum2(cx, cy), Some(V::Square(2, cz))) | (V::Square(2, cz), Some(V::Sum2(cx, cy))) => {
+                        V::Sum3([cx, cy, cz])
+                    }
+                    _ => return None,
+                },
+                (Code::Sqrt, Some(V::Sum3(c))) => V::Root(c),
+                (Code::SubI, Some(V::Root(c))) => V::Distance(c, op.imm),
+                _ => return None,
+            };
+            *regs.get_mut(op.out as usize)? = Some(v);
         }
-        let want: [(Code, [Option<usize>; 2]); 10] = [
-            (Code::SubI, [Some(100), None]),
-            (Code::SubI, [Some(101), None]),
-            (Code::SubI, [Some(102), None]),
-            (Code::Square, [Some(0), None]),
-            (Code::Square, [Some(1), None]),
-            (Code::Add, [Some(3), Some(4)]),
-            (Code::Square, [Some(2), None]),
-            (Code::Add, [Some(5), Some(6)]),
-            (Code::Sqrt, [Some(7), None]),
-            (Code::SubI, [Some(8), None]),
-        ];
-        let ok = ops
-            .iter()
-            .zip(&reads)
-            .zip(&want)
-            .all(|((op, r), (code, w))| op.code == *code && r == w)
-            && holds.get(self.output as usize).copied().flatten() == Some(9);
-        ok.then(|| ([ops[0].imm, ops[1].imm, ops[2].imm], ops[9].imm))
+        match regs.get(self.output as usize).copied().flatten()? {
+            V::Distance(c, r) => Some((c, r)),
+            _ => None,
+        }
     }
 
     /// Instructions per point.
@@ -845,6 +860,8 @@ mod tests {
         for (src, fused) in [
             ("sphere(p - vec3(1.0, -2.0, 0.37), 0.22)", true),
             ("length(p - vec3(0.5, 0.25, -3.0)) - 1.5", true),
+            ("sphere(p - vec3(0.0, 1.5, 0.0), 0.75)", true),
+            ("sphere(p, 0.5)", true),
             ("sphere(p * 2.0, 1.0)", false),
             ("box(p, vec3(0.5))", false),
         ] {
@@ -923,12 +940,20 @@ mod tests {
             form("length(p - vec3(0.5, 0.25, -3.0)) - 1.5"),
             Some(([0.5, 0.25, -3.0], 1.5))
         );
+        // Centre coordinates of 0 subtract nothing.
+        assert_eq!(
+            form("sphere(p - vec3(0.0, -1000.0, 0.0), 999.0)"),
+            Some(([0.0, -1000.0, 0.0], 999.0))
+        );
+        assert_eq!(form("sphere(p, 0.5)"), Some(([0.0; 3], 0.5)));
         for other in [
             "sphere(p - vec3(1.0, 2.0, 3.0), 0.25) + 0.0 * sin(p.x)",
             "sphere(p * 2.0, 1.0)",
             "length(p - vec3(1.0, 2.0, 3.0)) + 0.5",
             "box(p - vec3(1.0, 2.0, 3.0), vec3(0.5))",
             "sphere(p - vec3(1.0, 2.0, 3.0), 0.25 + 0.1 * t)",
+            // Summed in another order: other roundings.
+            "sqrt((p.x - 1.0) * (p.x - 1.0) + ((p.y - 2.0) * (p.y - 2.0) + (p.z - 3.0) * (p.z - 3.0))) - 0.5",
         ] {
             assert_eq!(form(other), None, "{other}");
         }
