@@ -105,7 +105,7 @@ impl Analytic {
 
     /// Recognises a plane or a sphere, with the inputs `vars`.
     pub fn recognise(shape: &Shape, vars: &[f64]) -> Option<Analytic> {
-        // A tape that is a sphere's ten operations is that sphere, its
+        // A tape that is exactly a sphere's operations is that sphere, its
         // centre and radius read from it exactly.
         if let Some((c, r)) = isoray_shape::sphere_form(shape.tape()).filter(|&(_, r)| r > 0.0) {
             return Some(Analytic::Sphere { c, r });
@@ -114,6 +114,7 @@ impl Analytic {
         // One evaluator for the couple of hundred points.
         let mut eval = isoray_shape::PointEvaluator::<f64>::new(shape.tape());
         let mut d = |p: [f64; 3]| eval.eval(vars, p[0], p[1], p[2]);
+        let (d0, d1) = (d(pts[0]), d(pts[1]));
         // Equal at the probes, and on and near the candidate's own surface:
         // a shape clipped by a sphere, max(f, sphere(p, r)), is that
         // sphere's distance at every probe far from it, not at its surface.
@@ -125,7 +126,6 @@ impl Analytic {
             })
         };
         let g0 = shape.gradient_with(vars, pts[0], GradientMode::Dual);
-        let d0 = shape.eval_with(vars, pts[0]);
         if !d0.is_finite() || !g0.iter().all(|x| x.is_finite()) {
             return None;
         }
@@ -140,7 +140,7 @@ impl Analytic {
             }
         }
         // Sphere: c = p − (d + r)∇d; with a second point, |p₁ − c| = d₁ + r.
-        let (p1, d1) = (pts[1], shape.eval_with(vars, pts[1]));
+        let p1 = pts[1];
         // |p₁ − p₀ + (d₀ + r) g₀| = d₁ + r: a quadratic in s = d₀ + r.
         let w = sub(p1, pts[0]);
         let k = d1 - d0; // d₁ + r = s + k

@@ -195,13 +195,9 @@ pub struct PointEvaluator<'t, T: Num> {
 impl<'t, T: Num> PointEvaluator<'t, T> {
     /// An evaluator for `tape` (allocates its slots once).
     pub fn new(tape: &'t Tape) -> Self {
-        let mut slots = vec![T::from_f64(0.0); tape.slots()];
-        for &(s, v) in tape.constants() {
-            slots[s as usize] = T::from_f64(v);
-        }
         PointEvaluator {
             tape,
-            slots,
+            slots: constant_slots(tape),
             inputs: InputCache::default(),
         }
     }
@@ -379,13 +375,9 @@ pub struct BatchEvaluator<'t, T: BatchNum> {
 impl<'t, T: BatchNum> BatchEvaluator<'t, T> {
     /// An evaluator for `tape`; allocates its working memory once.
     pub fn new(tape: &'t Tape) -> Self {
-        let mut values = vec![T::from_f64(0.0); tape.slots()];
-        for &(s, v) in tape.constants() {
-            values[s as usize] = T::from_f64(v);
-        }
         BatchEvaluator {
             tape,
-            values,
+            values: constant_slots(tape),
             slot_info: Slots::of(tape),
             programs: rustc_hash::FxHashMap::default(),
             compiler: Compiler::default(),
@@ -574,6 +566,15 @@ pub fn finite_differences<T: BatchNum>(
             gz[i] = gz[i] + wz * f;
         }
     }
+}
+
+/// One value per slot of `tape`: its constants in theirs, 0 elsewhere.
+pub(crate) fn constant_slots<T: Num>(tape: &Tape) -> Vec<T> {
+    let mut slots = vec![T::from_f64(0.0); tape.slots()];
+    for &(s, v) in tape.constants() {
+        slots[s as usize] = T::from_f64(v);
+    }
+    slots
 }
 
 /// Block storage for a tape: [`LANES`] values per slot, the constants'

@@ -103,10 +103,7 @@ impl<'t> Fold<'t> {
                 return None;
             }
             let slots = Slots::<f32>::of(t);
-            let mut values = vec![0.0f32; t.slots()];
-            for &(s, v) in t.constants() {
-                values[s as usize] = v as f32;
-            }
+            let mut values: Vec<f32> = crate::eval::constant_slots(t);
             let mut scratch = Vec::new();
             for (s, v) in t.prologue().run(vars, &mut scratch) {
                 values[s] = v as f32;

@@ -761,22 +761,11 @@ impl Builder {
             let (ops, k) = operand_array(&self.ops[i as usize]);
             pending.extend(ops[..k].iter().map(|m| m.0));
         }
-        if keep.len() == n {
-            return Tape::extract(&self.ops, &self.lazy, output);
-        }
-        // The needed nodes alone, in their order: the same tape.
         keep.reverse();
-        let map = |m: Node| Node(keep.binary_search(&m.0).map_or(u32::MAX, |j| j as u32));
-        let ops: Vec<Op> = keep.iter().map(|&i| renamed(self.ops[i as usize], map)).collect();
-        let lazy = (self.lazy.iter())
-            .map(|&l| map(l))
-            .filter(|l| l.0 != u32::MAX)
-            .collect();
-        Tape::extract(&ops, &lazy, map(output))
+        let rename = |m: Node| Node(keep.binary_search(&m.0).map_or(u32::MAX, |j| j as u32));
+        self.tape_of(&keep, rename, output)
     }
-}
 
-impl Builder {
     /// [`Builder::tape`] for an output that needs much of the builder:
     /// marks over arrays of its size.
     fn tape_dense(&self, output: Node) -> Tape {
@@ -791,25 +780,26 @@ impl Builder {
                 }
             }
         }
+        let keep: Vec<u32> = (0..n as u32).filter(|&i| needed[i as usize]).collect();
         let mut map = vec![u32::MAX; n];
-        let mut kept = 0u32;
-        for i in 0..n {
-            if needed[i] {
-                map[i] = kept;
-                kept += 1;
-            }
+        for (j, &i) in keep.iter().enumerate() {
+            map[i as usize] = j as u32;
         }
-        if kept as usize == n {
+        let rename = |m: Node| Node(map.get(m.0 as usize).copied().unwrap_or(u32::MAX));
+        self.tape_of(&keep, rename, output)
+    }
+
+    /// The tape of the nodes `keep` (ascending: everything `output`
+    /// needs), numbered by `rename` (`u32::MAX` for a node not kept).
+    fn tape_of(&self, keep: &[u32], rename: impl Fn(Node) -> Node, output: Node) -> Tape {
+        if keep.len() == output.0 as usize + 1 {
             return Tape::extract(&self.ops, &self.lazy, output);
         }
-        let rename = |m: Node| Node(map[m.0 as usize]);
-        let ops: Vec<Op> = (0..n)
-            .filter(|&i| needed[i])
-            .map(|i| renamed(self.ops[i], rename))
-            .collect();
+        // The needed nodes alone, in their order: the same tape.
+        let ops: Vec<Op> = keep.iter().map(|&i| renamed(self.ops[i as usize], &rename)).collect();
         let lazy = (self.lazy.iter())
-            .filter(|l| (l.0 as usize) < n && needed[l.0 as usize])
             .map(|&l| rename(l))
+            .filter(|l| l.0 != u32::MAX)
             .collect();
         Tape::extract(&ops, &lazy, rename(output))
     }

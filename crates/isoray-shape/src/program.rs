@@ -82,7 +82,8 @@ struct Op<T> {
     b: u32,
     c: u32,
     imm: T,
-    /// `Sphere`: the index of its centre's three coordinates in `data`.
+    /// `Sphere`, `SphereUnion`: where its centre's three coordinates (and
+    /// for `SphereUnion` then its radius) are in `data`.
     d: u32,
 }
 
@@ -97,7 +98,7 @@ pub(crate) struct Program<T> {
     pub(crate) loads: Vec<(u32, u32)>,
     /// The register holding the result.
     pub(crate) output: u32,
-    /// Operands of fused operations (a sphere's centre).
+    /// Operands of fused operations (spheres' centres and radii).
     data: Vec<T>,
     /// When the whole program is a sphere's distance from the point: its
     /// centre and radius (see [`Program::sphere_form`]).
@@ -845,6 +846,14 @@ mod tests {
         }
     }
 
+    /// `src`'s program in f32 and its values by slot (constants only).
+    fn compiled(lib: &Library, src: &str) -> (super::Program<f32>, Vec<f32>) {
+        let sh = compile(lib, src).unwrap();
+        let t = sh.tape();
+        let prog = super::Compiler::default().compile(t, &super::Slots::<f32>::of(t));
+        (prog, crate::eval::constant_slots(t))
+    }
+
     /// A sphere's program joins an assembled one as a single operation
     /// with the same values; other programs are copied as they are.
     #[test]
@@ -865,14 +874,7 @@ mod tests {
             ("sphere(p * 2.0, 1.0)", false),
             ("box(p, vec3(0.5))", false),
         ] {
-            let sh = compile(&lib, src).unwrap();
-            let t = sh.tape();
-            let slots = super::Slots::<f32>::of(t);
-            let prog = super::Compiler::default().compile(t, &slots);
-            let mut values = vec![0.0f32; t.slots()];
-            for &(s, v) in t.constants() {
-                values[s as usize] = v as f32;
-            }
+            let (prog, values) = compiled(&lib, src);
             let mut asm = super::Assembler::<f32>::new();
             let out = asm.append(&prog, &values, 3);
             let joined = asm.finish(out);
@@ -906,13 +908,7 @@ mod tests {
             "min(box(p, vec3(0.5)) + 0.2 * step(0.3, p.y), pow(abs(p.z) + 0.1, 1.5) - exp(-p.x * p.x))",
             "sphere(p - vec3(1.0, -2.0, 0.37), 0.22)",
         ] {
-            let t = compile(&lib, src).unwrap().tape().clone();
-            let slots = super::Slots::<f32>::of(&t);
-            let prog = super::Compiler::default().compile(&t, &slots);
-            let mut values = vec![0.0f32; t.slots()];
-            for &(s, v) in t.constants() {
-                values[s as usize] = v as f32;
-            }
+            let (prog, values) = compiled(&lib, src);
             for n in [1usize, 7, 8, 9, 64, 100] {
                 let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rnd()).collect());
                 let (mut a, mut b) = (vec![0.0f32; n], vec![0.0f32; n]);
