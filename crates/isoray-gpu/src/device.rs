@@ -26,7 +26,7 @@ pub enum GpuError {
 }
 
 /// Storage buffers the tracer binds in one shader.
-const STORAGE_BUFFERS: u32 = 12;
+const STORAGE_BUFFERS: u32 = 13;
 
 /// A GPU device and its queue, with the adapter's description.
 pub struct Gpu {
@@ -60,7 +60,7 @@ impl Gpu {
         let info = adapter.get_info();
         // Timestamp queries time the passes where the adapter has them.
         let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
-        // The tracer binds eleven storage buffers (WebGPU's default allows 8;
+        // The tracer binds thirteen storage buffers (WebGPU's default allows 8;
         // every Vulkan driver has more).
         let have = adapter.limits();
         if have.max_storage_buffers_per_shader_stage < STORAGE_BUFFERS {
@@ -111,6 +111,12 @@ impl Gpu {
     ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout), GpuError> {
         let (mut pipelines, layout) = self.compute_pipelines(source, what, bindings, &["main"])?;
         Ok((pipelines.remove(0), layout))
+    }
+
+    /// Whether the adapter is a software one (lavapipe, llvmpipe,
+    /// SwiftShader, WARP): the CPU's cores running the shaders.
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
     }
 
     /// As [`Gpu::compute_pipeline`], one pipeline per entry point of the

@@ -7,20 +7,27 @@
 //! (parameters, time, placements) live in a storage buffer, so changing
 //! them never rebuilds a pipeline.
 //!
-//! So far: the device ([`Gpu`]) and a compute evaluator of tapes over
-//! points ([`Gpu::eval_points`]), which the evaluator conformance suite
-//! holds to the reference semantics (`tests/conformance.rs`).
+//! The device ([`Gpu`]); a compute evaluator of tapes over points
+//! ([`Gpu::eval_points`]), which the evaluator conformance suite holds to
+//! the reference semantics (`tests/conformance.rs`); and the renderer
+//! ([`GpuRenderer`]): the tracer in `src/kernel/*.wgsl`, reading the
+//! buffer structures of [`layout`] and the scene's fold cells.
 
 #![warn(missing_docs)]
 
 pub mod accuracy;
+mod cells;
 mod device;
+#[cfg(test)]
+mod kernel_parity;
+pub mod layout;
 mod pack;
 mod points;
 mod raster;
 mod render;
 
+pub use cells::CellStats;
 pub use device::{Gpu, GpuError};
-pub use pack::{Kernel, SceneCode};
+pub use pack::{Features, Kernel, SceneCode};
 pub use points::PointShader;
-pub use render::{band_count, GpuRenderOptions, GpuRenderer, GpuTiming};
+pub use render::{band_count, FoldCells, GpuRenderOptions, GpuRenderer, GpuTiming};

@@ -1,6 +1,6 @@
 //! A scene as the GPU tracer reads it: the generated WGSL of its objects
 //! (the only part that depends on the shapes' structure) and the buffers
-//! of everything else, laid out as `render.wgsl` declares them.
+//! of everything else, laid out as `kernel/layout.wgsl` declares them.
 
 use std::sync::Arc;
 
@@ -15,25 +15,31 @@ use isoray_scene::{
     StepLimit, View,
 };
 use isoray_shade::MaterialSample;
+
+use crate::layout::{Light, Mat, Obj, Settings};
 use isoray_shape::wgsl::{
     emit_tape, emit_tape_dual, encode_tape, interpreter, WgslFunction, MAX_INTERPRETED_SLOTS, PRELUDE,
 };
 
-/// Words of `Settings` in `render.wgsl`.
-pub(crate) const SETTINGS_WORDS: usize = 76;
-/// Words of one `Light`.
-const LIGHT_WORDS: usize = 20;
-/// Words of one `Mat`.
-const MAT_WORDS: usize = 28;
-/// Words of one `Obj`.
-const OBJ_WORDS: usize = 12;
 /// Words per pixel of the output: colour, then depth, normal and albedo.
 pub(crate) const RECORD_AOVS: u32 = 10;
 /// Words per pixel of the output without AOVs: the colour.
 pub(crate) const RECORD_COLOUR: u32 = 3;
 
-/// The tracer's source: the generated objects, then `render.wgsl`.
-pub(crate) const TRACER: &str = include_str!("render.wgsl");
+/// The tracer's source, after the generated objects: `kernel/*.wgsl`
+/// joined (see `kernel/layout.wgsl` for what each file mirrors).
+pub(crate) const TRACER: &str = concat!(
+    include_str!("kernel/layout.wgsl"),
+    include_str!("kernel/fold.wgsl"),
+    include_str!("kernel/tracer.wgsl"),
+    include_str!("kernel/meshes.wgsl"),
+    include_str!("kernel/dents.wgsl"),
+    include_str!("kernel/optics.wgsl"),
+    include_str!("kernel/shade.wgsl"),
+    include_str!("kernel/environment.wgsl"),
+    include_str!("kernel/whitted.wgsl"),
+    include_str!("kernel/pixels.wgsl"),
+);
 
 /// How the GPU evaluates the objects' distances.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -75,6 +81,57 @@ impl Kernel {
     }
 }
 
+/// What of the tracer a scene can reach, written into its module as
+/// constants so that the driver compiles the rest out: on a software
+/// adapter (lavapipe) every branch some lane takes runs for all lanes, so
+/// code that no pixel needs still costs every pixel its time, and every
+/// line costs compile time. Each is a property of the scene's structure or
+/// of its materials; a change of one builds a new pipeline.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Features {
+    /// Triangle meshes (`[[mesh]]`).
+    pub meshes: bool,
+    /// Objects drawn with dent maps (the GPU's planar and spherical ones).
+    pub dents: bool,
+    /// A material that reflects or refracts.
+    pub optics: bool,
+    /// A transparent object (shadow rays pass through it).
+    pub clear: bool,
+}
+
+impl Features {
+    /// The scene's.
+    pub fn of(scene: &Scene) -> Features {
+        let optical = |m: &isoray_scene::Material| {
+            let s = MaterialSample::from(m);
+            s.transparency > 0.0 || s.reflectivity.max_element() > 0.0
+        };
+        Features {
+            meshes: !scene.meshes.is_empty(),
+            dents: scene.objects.iter().any(|o| {
+                matches!(o.physics.dents, DentMode::Bump | DentMode::Auto)
+                    && o.physics
+                        .maps
+                        .as_ref()
+                        .is_some_and(|m| !matches!(m.mapping, UvMapping::Parametric(_)))
+            }),
+            optics: scene.materials.iter().any(optical),
+            clear: scene
+                .objects
+                .iter()
+                .any(|o| scene.materials[o.material].transparency > 0.0),
+        }
+    }
+
+    /// The constants of the tracer (`kernel/*.wgsl`).
+    fn wgsl(self) -> String {
+        format!(
+            "const HAS_MESHES: bool = {};\nconst HAS_DENTS: bool = {};\nconst HAS_OPTICS: bool = {};\nconst HAS_CLEAR: bool = {};\n",
+            self.meshes, self.dents, self.optics, self.clear
+        )
+    }
+}
+
 /// Where one object's inputs and program live.
 #[derive(Debug, Clone)]
 struct ObjectCode {
@@ -90,6 +147,8 @@ struct ObjectCode {
 pub struct SceneCode {
     /// The kernel.
     pub kernel: Kernel,
+    /// What of the tracer it compiles in.
+    pub features: Features,
     /// The whole WGSL module (prelude, objects, tracer); the same for
     /// every scene with the interpreted kernel.
     pub source: String,
@@ -102,7 +161,9 @@ impl SceneCode {
     /// Writes the module for the scene's objects as they are now. With the
     /// interpreted kernel, a tape with too many slots is an error.
     pub fn new(scene: &Scene, kernel: Kernel) -> Result<SceneCode, String> {
+        let features = Features::of(scene);
         let mut source = String::from(PRELUDE);
+        source.push_str(&features.wgsl());
         source.push_str("@group(0) @binding(0) var<storage, read> iso_in: array<f32>;\n");
         let mut objects = Vec::new();
         let mut code = Vec::new();
@@ -162,6 +223,7 @@ impl SceneCode {
         source.push_str(TRACER);
         Ok(SceneCode {
             kernel,
+            features,
             source,
             objects,
             code,
@@ -187,32 +249,33 @@ impl SceneCode {
 
     /// The `Obj` array: material, closed form and program of each object.
     /// `dents[i]`: object i's header in the dent buffer ([`dents`]), or `NO_DENT`.
-    pub(crate) fn objects(&self, scene: &Scene, dents: &[u32]) -> Words {
-        let mut out = Words::default();
-        for (((o, a), c), &dent) in scene
+    pub(crate) fn objects(&self, scene: &Scene, dents: &[u32]) -> Vec<Obj> {
+        scene
             .objects
             .iter()
             .zip(&scene.derived().analytic)
             .zip(&self.objects)
             .zip(dents)
-        {
-            let (kind, v) = match a {
-                None => (0, [0.0f32; 4]),
-                Some(Analytic::Plane { n, h }) => (1, [n[0] as f32, n[1] as f32, n[2] as f32, *h as f32]),
-                Some(Analytic::Sphere { c, r }) => (2, [c[0] as f32, c[1] as f32, c[2] as f32, (r * r) as f32]),
-            };
-            let (start, len, slot) = c.program;
-            out.u(o.material as u32).u(kind).u(start).u(len);
-            out.u(slot).u(dent).u(0).u(0);
-            for x in v {
-                out.f(x);
-            }
-        }
-        if scene.objects.is_empty() {
-            out.0.resize(OBJ_WORDS, 0);
-        }
-        debug_assert_eq!(out.0.len() % OBJ_WORDS, 0);
-        out
+            .map(|(((o, a), c), &dent)| {
+                let (analytic, a) = match a {
+                    None => (0, [0.0f32; 4]),
+                    Some(Analytic::Plane { n, h }) => (1, [n[0] as f32, n[1] as f32, n[2] as f32, *h as f32]),
+                    Some(Analytic::Sphere { c, r }) => (2, [c[0] as f32, c[1] as f32, c[2] as f32, (r * r) as f32]),
+                };
+                let (code_start, code_len, out_slot) = c.program;
+                Obj {
+                    material: o.material as u32,
+                    analytic,
+                    code_start,
+                    code_len,
+                    out_slot,
+                    dent,
+                    pad1: 0,
+                    pad2: 0,
+                    a,
+                }
+            })
+            .collect()
     }
 }
 
@@ -308,7 +371,14 @@ impl Scratch {
 /// The `Settings` buffer for one band of the image; `raster` is the row
 /// stride (words) of the meshes' raster prepass ids when the primary rays
 /// read them (see `raster`).
-pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch, raster: Option<u32>) -> Words {
+pub(crate) fn settings(
+    scene: &Scene,
+    band: Band,
+    aovs: bool,
+    scratch: Scratch,
+    raster: Option<u32>,
+    reaches: &isoray_render::Reaches,
+) -> Settings {
     let record = if aovs { RECORD_AOVS } else { RECORD_COLOUR };
     let r = &scene.render;
     let c = &scene.camera;
@@ -353,124 +423,212 @@ pub(crate) fn settings(scene: &Scene, band: Band, aovs: bool, scratch: Scratch, 
         }
     };
     let blend = r.blend as f32;
-    let mut out = Words::default();
-    out.u(w).u(h).u(band.x0).u(band.y0);
-    out.u(band.width).u(band.height).u(r.aa).u(r.max_steps);
-    out.f(r.hit_epsilon as f32)
-        .u(r.relative_epsilon as u32)
-        .f(r.max_distance as f32)
-        .f(r.step_scale as f32);
-    out.u(normals)
-        .f(r.normal_epsilon as f32)
-        .f((1.0 / r.normal_epsilon) as f32)
-        .u(shadows);
-    out.f(r.shadow_exponent as f32)
-        .f(r.shadow_start as f32)
-        .f(r.shadow_max_distance as f32)
-        .u(r.shadow_max_steps);
-    out.u(r.ao as u32)
-        .u(r.ao_samples)
-        .f(r.ao_step as f32)
-        .f(r.ao_intensity as f32);
-    let quarter = if r.blend > 0.0 { (0.25 / r.blend) as f32 } else { 0.0 };
-    out.f(blend).f(quarter).f(blend * r.material_blend as f32).u(view);
-    out.u(r.max_depth)
-        .f(r.min_weight as f32)
-        .u(scene.lights.len() as u32)
-        .u(scene.objects.len() as u32);
-    out.d3(r.background).u(aovs as u32);
-    out.d3(c.position).u((c.projection == Projection::Equirect) as u32);
-    out.d3(fwd).f(c.tan_half_fov() as f32);
-    out.d3(right).f((w as f64 / h as f64) as f32);
-    out.d3(up).u(n_clear);
-    out.u(env_kind).f(env_cos).f(env_sin).f(env_k);
-    let any_analytic = scene.derived().analytic.iter().any(Option::is_some);
-    out.u(any_analytic as u32)
-        .u(record)
-        .u(scratch.stack_cap)
-        .u(scratch.reg_slots);
-    out.u((r.on_step_limit == StepLimit::Miss) as u32)
-        .f(r.shadow_floor as f32)
-        .u((r.shadow_applies_to == ShadowTarget::All) as u32)
-        .u((r.ao_weights == AoWeights::Uniform) as u32);
-    out.u((r.ao_applies_to == AoTarget::All) as u32).d3(r.ambient);
+    let f3 = |v: [f64; 3]| v.map(|x| x as f32);
+    let ([bg_r, bg_g, bg_b], [cam_x, cam_y, cam_z]) = (f3(r.background), f3(c.position));
+    let ([fwd_x, fwd_y, fwd_z], [right_x, right_y, right_z], [up_x, up_y, up_z]) = (f3(fwd), f3(right), f3(up));
+    let [amb_r, amb_g, amb_b] = f3(r.ambient);
     let aa_pattern = match r.aa_pattern {
         AaPattern::Grid => 0,
         AaPattern::Rotated => 1,
         AaPattern::Jittered => 2,
     };
-    out.u((r.march == March::Fixed) as u32)
-        .f(r.fixed_step as f32)
-        .u(aa_pattern)
-        .f(r.shadow_epsilon as f32);
     let parallax = match r.parallax {
         isoray_scene::Parallax::None => 0,
         isoray_scene::Parallax::Offset => 1,
         isoray_scene::Parallax::Steep => 2,
         isoray_scene::Parallax::Occlusion => 3,
     };
-    out.u(raster.is_some() as u32)
-        .u(raster.unwrap_or(0))
-        .u(parallax)
-        .u(r.parallax_steps);
-    debug_assert_eq!(out.0.len(), SETTINGS_WORDS);
-    out
+    let optical = scene.materials.iter().any(|m| {
+        let s = MaterialSample::from(m);
+        s.transparency > 0.0 || s.reflectivity.max_element() > 0.0
+    });
+    Settings {
+        width: w,
+        height: h,
+        x0: band.x0,
+        y0: band.y0,
+        region_w: band.width,
+        region_h: band.height,
+        aa: r.aa,
+        max_steps: r.max_steps,
+        hit_eps: r.hit_epsilon as f32,
+        relative_eps: r.relative_epsilon as u32,
+        max_dist: r.max_distance as f32,
+        step_scale: r.step_scale as f32,
+        normals,
+        normal_h: r.normal_epsilon as f32,
+        normal_inv_h: (1.0 / r.normal_epsilon) as f32,
+        shadows,
+        shadow_exponent: r.shadow_exponent as f32,
+        shadow_start: r.shadow_start as f32,
+        shadow_max_dist: r.shadow_max_distance as f32,
+        shadow_max_steps: r.shadow_max_steps,
+        ao: r.ao as u32,
+        ao_samples: r.ao_samples,
+        ao_step: r.ao_step as f32,
+        ao_intensity: r.ao_intensity as f32,
+        blend,
+        blend_quarter_over_k: if r.blend > 0.0 { (0.25 / r.blend) as f32 } else { 0.0 },
+        material_blend_k: blend * r.material_blend as f32,
+        view,
+        max_depth: r.max_depth,
+        min_weight: r.min_weight as f32,
+        n_lights: scene.lights.len() as u32,
+        n_objects: scene.objects.len() as u32,
+        bg_r,
+        bg_g,
+        bg_b,
+        aovs: aovs as u32,
+        cam_x,
+        cam_y,
+        cam_z,
+        projection: (c.projection == Projection::Equirect) as u32,
+        fwd_x,
+        fwd_y,
+        fwd_z,
+        tan_half: c.tan_half_fov() as f32,
+        right_x,
+        right_y,
+        right_z,
+        aspect: (w as f64 / h as f64) as f32,
+        up_x,
+        up_y,
+        up_z,
+        n_clear,
+        env_kind,
+        env_cos,
+        env_sin,
+        env_k,
+        any_analytic: scene.derived().analytic.iter().any(Option::is_some) as u32,
+        record,
+        stack_cap: scratch.stack_cap,
+        reg_slots: scratch.reg_slots,
+        step_limit_miss: (r.on_step_limit == StepLimit::Miss) as u32,
+        shadow_floor: r.shadow_floor as f32,
+        shadow_all: (r.shadow_applies_to == ShadowTarget::All) as u32,
+        ao_uniform: (r.ao_weights == AoWeights::Uniform) as u32,
+        ao_all: (r.ao_applies_to == AoTarget::All) as u32,
+        amb_r,
+        amb_g,
+        amb_b,
+        fixed_march: (r.march == March::Fixed) as u32,
+        fixed_step: r.fixed_step as f32,
+        aa_pattern,
+        shadow_eps: r.shadow_epsilon as f32,
+        raster: raster.is_some() as u32,
+        raster_stride: raster.unwrap_or(0),
+        parallax,
+        parallax_steps: r.parallax_steps,
+        any_optical: optical as u32,
+        ..reach_settings(reaches)
+    }
 }
 
-/// The `Light` array (one dummy entry when there are none).
-pub(crate) fn lights(scene: &Scene) -> Words {
-    let mut out = Words::default();
-    for l in &scene.lights {
-        let (kind, pos, radius, u, v) = match l.kind {
-            LightKind::Directional { direction } => (0, direction, 0.0, [0.0; 3], [0.0; 3]),
-            LightKind::Point { position } => (1, position, 0.0, [0.0; 3], [0.0; 3]),
-            LightKind::Sphere { position, radius } => (2, position, radius, [0.0; 3], [0.0; 3]),
-            LightKind::Rect { position, u, v } => (3, position, 0.0, u, v),
-        };
-        out.u(kind).u(l.samples).f(l.size as f32).f(l.intensity as f32);
-        out.d3(l.color).f(l.attenuation[0] as f32);
-        out.f(l.attenuation[1] as f32).f(l.attenuation[2] as f32);
-        out.d3(pos).f(radius as f32).d3(u).d3(v);
+/// The settings' reach fields: the scene's and the rest's surface boxes
+/// in their domain, as `reach_far` in `kernel/tracer.wgsl` reads them.
+fn reach_settings(reaches: &isoray_render::Reaches) -> Settings {
+    let corner = |p: [f64; 3]| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0];
+    let mut s = Settings::default();
+    let domain = reaches.scene.as_ref().or(reaches.rest.as_ref()).map(|r| r.boxes().0);
+    if let Some(d) = domain {
+        s.reach_domain_lo = corner(d.lo);
+        s.reach_domain_hi = corner(d.hi);
     }
-    if scene.lights.is_empty() {
-        out.0.resize(LIGHT_WORDS, 0);
-    }
-    debug_assert_eq!(out.0.len() % LIGHT_WORDS, 0);
-    out
+    let one = |reach: &Option<isoray_render::reach::Reach>| -> (u32, [f32; 4], [f32; 4]) {
+        match reach.as_ref().map(|r| r.boxes()) {
+            None => (0, [0.0; 4], [0.0; 4]),
+            Some((d, _)) if domain.is_some_and(|e| e != d) => (0, [0.0; 4], [0.0; 4]),
+            Some((_, None)) => (1, [0.0; 4], [0.0; 4]),
+            Some((_, Some(b))) => (2, corner(b.lo), corner(b.hi)),
+        }
+    };
+    (s.reach_scene, s.reach_scene_lo, s.reach_scene_hi) = one(&reaches.scene);
+    (s.reach_rest, s.reach_rest_lo, s.reach_rest_hi) = one(&reaches.rest);
+    s
+}
+
+/// The `Light` array.
+pub(crate) fn lights(scene: &Scene) -> Vec<Light> {
+    let f3 = |v: [f64; 3]| v.map(|x| x as f32);
+    scene
+        .lights
+        .iter()
+        .map(|l| {
+            let (kind, pos, radius, u, v) = match l.kind {
+                LightKind::Directional { direction } => (0, direction, 0.0, [0.0; 3], [0.0; 3]),
+                LightKind::Point { position } => (1, position, 0.0, [0.0; 3], [0.0; 3]),
+                LightKind::Sphere { position, radius } => (2, position, radius, [0.0; 3], [0.0; 3]),
+                LightKind::Rect { position, u, v } => (3, position, 0.0, u, v),
+            };
+            let ([cr, cg, cb], [px, py, pz], [ux, uy, uz], [vx, vy, vz]) = (f3(l.color), f3(pos), f3(u), f3(v));
+            let [att_c, att_l, att_q] = l.attenuation.map(|x| x as f32);
+            Light {
+                kind,
+                samples: l.samples,
+                size: l.size as f32,
+                intensity: l.intensity as f32,
+                cr,
+                cg,
+                cb,
+                att_c,
+                att_l,
+                att_q,
+                px,
+                py,
+                pz,
+                radius: radius as f32,
+                ux,
+                uy,
+                uz,
+                vx,
+                vy,
+                vz,
+            }
+        })
+        .collect()
 }
 
 /// The `Mat` array, as isoray-shade rounds each material to f32.
-pub(crate) fn materials(scene: &Scene) -> Words {
-    let mut out = Words::default();
-    for m in &scene.materials {
-        let s = MaterialSample::from(m);
-        let model = match s.model {
-            isoray_scene::ShadingModel::Phong => 0,
-            isoray_scene::ShadingModel::BlinnPhong => 1,
-        };
-        let spec = match s.specular_function {
-            isoray_scene::SpecularFunction::Pow => 0,
-            isoray_scene::SpecularFunction::Schlick => 1,
-        };
-        let fresnel = match s.fresnel {
-            isoray_scene::Fresnel::Off => 0,
-            isoray_scene::Fresnel::Schlick => 1,
-            isoray_scene::Fresnel::Exact => 2,
-        };
-        let (other, size) = m.checker.map_or((u32::MAX, 1.0), |(o, sz)| (o as u32, sz as f32));
-        out.v3(s.ambient.to_array()).f(s.shininess);
-        out.v3(s.diffuse.to_array()).f(s.transparency);
-        out.v3(s.specular.to_array()).f(s.ior);
-        out.v3(s.emission.to_array()).u(model);
-        out.v3(s.reflectivity.to_array()).u(spec);
-        out.v3(s.absorption.to_array()).u(fresnel);
-        out.u(other).f(size).u(s.specular_fresnel as u32).u(0);
-    }
-    if scene.materials.is_empty() {
-        out.0.resize(MAT_WORDS, 0);
-    }
-    debug_assert_eq!(out.0.len() % MAT_WORDS, 0);
-    out
+pub(crate) fn materials(scene: &Scene) -> Vec<Mat> {
+    scene
+        .materials
+        .iter()
+        .map(|m| {
+            let s = MaterialSample::from(m);
+            let model = match s.model {
+                isoray_scene::ShadingModel::Phong => 0,
+                isoray_scene::ShadingModel::BlinnPhong => 1,
+            };
+            let specular_function = match s.specular_function {
+                isoray_scene::SpecularFunction::Pow => 0,
+                isoray_scene::SpecularFunction::Schlick => 1,
+            };
+            let fresnel = match s.fresnel {
+                isoray_scene::Fresnel::Off => 0,
+                isoray_scene::Fresnel::Schlick => 1,
+                isoray_scene::Fresnel::Exact => 2,
+            };
+            let (checker_other, checker_size) = m.checker.map_or((u32::MAX, 1.0), |(o, sz)| (o as u32, sz as f32));
+            Mat {
+                ambient: s.ambient.to_array(),
+                shininess: s.shininess,
+                diffuse: s.diffuse.to_array(),
+                transparency: s.transparency,
+                specular: s.specular.to_array(),
+                ior: s.ior,
+                emission: s.emission.to_array(),
+                model,
+                reflectivity: s.reflectivity.to_array(),
+                specular_function,
+                absorption: s.absorption.to_array(),
+                fresnel,
+                checker_other,
+                checker_size,
+                spec_fresnel: s.specular_fresnel as u32,
+                pad1: 0,
+            }
+        })
+        .collect()
 }
 
 /// The environment buffer: for images, a header of (width, height,
@@ -506,7 +664,7 @@ const MESH_RECORD: usize = 16;
 /// No vertex normals (a mesh record's normal base).
 const NO_NORMALS: u32 = u32::MAX;
 
-/// The scene's meshes as `render.wgsl`'s `mesh_data` reads them: the
+/// The scene's meshes as `kernel/meshes.wgsl`'s `mesh_data` reads them: the
 /// number of meshes; one 16-word record each (rotation quaternion x, y, z,
 /// w; translation; scale; node base, node count, triangle base, normal
 /// base or `u32::MAX`, material, triangle count, 2 unused); then each mesh's nodes (8

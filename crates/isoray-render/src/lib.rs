@@ -532,6 +532,118 @@ fn penumbra(scene: &Scene) -> Option<f64> {
     d
 }
 
+/// Where the fields the CPU tracer marches can have surface, for a pass
+/// tracing `rays` primary rays from a camera at `origin` (None: a coarse
+/// pass, without the surfaces' reach): see [`reach`]. The GPU renderer
+/// stops its rays where this one does.
+#[derive(Debug, Clone)]
+pub struct Reaches {
+    /// The cube every traced point lies in (the camera's reach, then
+    /// shadow rays' and ambient-occlusion samples'): the domain of the
+    /// pruned fields; None with `render.prune` off.
+    pub domain: Option<([f64; 3], f64)>,
+    /// Per object, the sphere its distance is, when it is (with
+    /// `render.prune` on and several objects; empty otherwise).
+    pub object_spheres: Vec<Option<([f64; 3], f64)>>,
+    /// The scene's field (rays outside objects without closed forms).
+    pub scene: Option<reach::Reach>,
+    /// The objects marched beside closed-form ones.
+    pub rest: Option<reach::Reach>,
+    /// What hard shadow rays march beside closed forms.
+    pub shadow: Option<reach::Reach>,
+    /// The transparent objects shadow rays pass through.
+    pub clear: Option<reach::Reach>,
+    /// Where the field shadow rays march without closed forms is below
+    /// the penumbra's distance.
+    pub penumbra: Option<reach::Reach>,
+}
+
+/// The fields' reaches (see [`Reaches`]).
+pub fn reaches(scene: &Scene, origin: [f64; 3], rays: Option<u64>) -> Reaches {
+    let r = &scene.render;
+    let reach = r.max_distance + r.shadow_max_distance + r.ao_step * r.ao_samples as f64 + 1.0;
+    let domain = r.prune.then_some((origin, reach));
+    // A hit is a distance below hit_epsilon (times t, at most max_distance).
+    let above = r.hit_epsilon
+        * if r.relative_epsilon {
+            r.max_distance.max(1.0)
+        } else {
+            1.0
+        };
+    // The objects that are spheres. When all are, the scene's reach
+    // (and the penumbra's, of the same field) is a union of balls' boxes.
+    let object_spheres: Vec<Option<([f64; 3], f64)>> = if domain.is_some() && scene.objects.len() > 1 {
+        scene
+            .objects
+            .par_iter()
+            .map(|o| match o.closed_form(&scene.inputs) {
+                Some(isoray_scene::analytic::Analytic::Sphere { c, r }) => Some((c, r)),
+                _ => None,
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let spheres: Option<Vec<([f64; 3], f64)>> = object_spheres
+        .iter()
+        .copied()
+        .collect::<Option<Vec<_>>>()
+        .filter(|s| !s.is_empty());
+    // Not in the steps view, which shows the march as it is without
+    // them (as it does without closed forms).
+    let reach_above = |tape: &isoray_shape::Tape, above: f64| {
+        let rays = rays.filter(|_| r.view != View::Steps)?;
+        let (c, h) = domain?;
+        let closed = spheres
+            .as_ref()
+            .filter(|_| std::ptr::eq(tape, scene.shape.tape()))
+            .and_then(|s| reach::Reach::of_spheres(s, r.blend, c, h, above));
+        Some(closed.unwrap_or_else(|| reach::Reach::new(tape, &scene.inputs, c, h, above, rays)))
+    };
+    // The fields' reaches, computed side by side (each is a search of
+    // its own over interval bounds, done before any tile starts).
+    let shadow = scene.derived().shadow.as_ref();
+    // The penumbra's box is the surface's when it bounds the same field
+    // at a distance no greater.
+    let penumbra_d = penumbra(scene);
+    let penumbra_is_surface = shadow.is_none() && penumbra_d.is_some_and(|d| d <= above);
+    let wanted: [Option<(&isoray_shape::Tape, f64)>; 5] = [
+        Some((scene.shape.tape(), above)),
+        scene.derived().rest.as_ref().map(|r| (r.tape(), above)),
+        shadow.and_then(|sh| sh.opaque_rest.as_ref()).map(|r| (r.tape(), above)),
+        shadow
+            .filter(|_| scene.render.shadows != ShadowMode::None)
+            .map(|sh| (sh.transparent.tape(), above)),
+        penumbra_d
+            .filter(|_| !penumbra_is_surface)
+            .map(|d| (shadow.map_or(scene.shape.tape(), |sh| sh.opaque.tape()), d)),
+    ];
+    let reaches: Vec<Option<reach::Reach>> = wanted
+        .par_iter()
+        .map(|w| w.and_then(|(tape, above)| reach_above(tape, above)))
+        .collect();
+    let [scene_reach, rest_reach, opaque_rest_reach, clear_reach, penumbra_reach] = std::array::from_fn(|k| reaches[k]);
+    let penumbra_reach = if penumbra_is_surface {
+        scene_reach
+    } else {
+        penumbra_reach
+    };
+    let shadow_reach = if shadow.is_some() {
+        opaque_rest_reach
+    } else {
+        rest_reach
+    };
+    Reaches {
+        domain,
+        object_spheres,
+        scene: scene_reach,
+        rest: rest_reach,
+        shadow: shadow_reach,
+        clear: clear_reach,
+        penumbra: penumbra_reach,
+    }
+}
+
 /// Read-only render context shared by all workers.
 struct Ctx<'s> {
     scene: &'s Scene,
@@ -597,80 +709,16 @@ impl<'s> Ctx<'s> {
             .map(|&m| MaterialSample::from(&scene.materials[m]))
             .collect();
         let material_surfaces = scene.materials.iter().map(MaterialSample::from).collect();
-        let r = &scene.render;
-        let reach = r.max_distance + r.shadow_max_distance + r.ao_step * r.ao_samples as f64 + 1.0;
-        let domain = r.prune.then(|| (cam.origin().to_array(), reach));
-        // A hit is a distance below hit_epsilon (times t, at most max_distance).
-        let above = r.hit_epsilon
-            * if r.relative_epsilon {
-                r.max_distance.max(1.0)
-            } else {
-                1.0
-            };
-        // The objects that are spheres. When all are, the scene's reach
-        // (and the penumbra's, of the same field) is a union of balls' boxes.
-        let object_spheres: Vec<Option<([f64; 3], f64)>> = if domain.is_some() && scene.objects.len() > 1 {
-            scene
-                .objects
-                .par_iter()
-                .map(|o| match o.closed_form(&scene.inputs) {
-                    Some(isoray_scene::analytic::Analytic::Sphere { c, r }) => Some((c, r)),
-                    _ => None,
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let spheres: Option<Vec<([f64; 3], f64)>> = object_spheres
-            .iter()
-            .copied()
-            .collect::<Option<Vec<_>>>()
-            .filter(|s| !s.is_empty());
-        // Not in the steps view, which shows the march as it is without
-        // them (as it does without closed forms).
-        let reach_above = |tape: &isoray_shape::Tape, above: f64| {
-            let rays = rays.filter(|_| r.view != View::Steps)?;
-            let (c, h) = domain?;
-            let closed = spheres
-                .as_ref()
-                .filter(|_| std::ptr::eq(tape, scene.shape.tape()))
-                .and_then(|s| reach::Reach::of_spheres(s, r.blend, c, h, above));
-            Some(closed.unwrap_or_else(|| reach::Reach::new(tape, &scene.inputs, c, h, above, rays)))
-        };
-        // The fields' reaches, computed side by side (each is a search of
-        // its own over interval bounds, done before any tile starts).
+        let Reaches {
+            domain,
+            object_spheres,
+            scene: scene_reach,
+            rest: rest_reach,
+            shadow: shadow_reach,
+            clear: clear_reach,
+            penumbra: penumbra_reach,
+        } = reaches(scene, cam.origin().to_array(), rays);
         let shadow = scene.derived().shadow.as_ref();
-        // The penumbra's box is the surface's when it bounds the same field
-        // at a distance no greater.
-        let penumbra_d = penumbra(scene);
-        let penumbra_is_surface = shadow.is_none() && penumbra_d.is_some_and(|d| d <= above);
-        let wanted: [Option<(&isoray_shape::Tape, f64)>; 5] = [
-            Some((scene.shape.tape(), above)),
-            scene.derived().rest.as_ref().map(|r| (r.tape(), above)),
-            shadow.and_then(|sh| sh.opaque_rest.as_ref()).map(|r| (r.tape(), above)),
-            shadow
-                .filter(|_| scene.render.shadows != ShadowMode::None)
-                .map(|sh| (sh.transparent.tape(), above)),
-            penumbra_d
-                .filter(|_| !penumbra_is_surface)
-                .map(|d| (shadow.map_or(scene.shape.tape(), |sh| sh.opaque.tape()), d)),
-        ];
-        let reaches: Vec<Option<reach::Reach>> = wanted
-            .par_iter()
-            .map(|w| w.and_then(|(tape, above)| reach_above(tape, above)))
-            .collect();
-        let [scene_reach, rest_reach, opaque_rest_reach, clear_reach, penumbra_reach] =
-            std::array::from_fn(|k| reaches[k]);
-        let penumbra_reach = if penumbra_is_surface {
-            scene_reach
-        } else {
-            penumbra_reach
-        };
-        let shadow_reach = if shadow.is_some() {
-            opaque_rest_reach
-        } else {
-            rest_reach
-        };
         let opaque_closed = (scene.derived().analytic.iter())
             .zip(&surfaces)
             .filter(|(_, sf)| shadow.is_none() || sf.transparency <= 0.0)

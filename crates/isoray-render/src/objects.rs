@@ -183,45 +183,20 @@ impl<'s> Objects<'s> {
     fn cull(&mut self, fold: Fold, lo: [f64; 3], hi: [f64; 3], candidates: &[u32]) -> Vec<u32> {
         let bx: [Interval; 3] = std::array::from_fn(|k| Interval::new(lo[k], hi[k]));
         let scale = (0..3).fold(0.0f64, |s, k| s.max(lo[k].abs()).max(hi[k].abs()));
-        // a < b at every point of the box, whatever the f32 evaluation's rounding.
-        let below = |a: f64, b: f64| a < b - 1e-5 * (a.abs() + b.abs() + scale) - 1e-6;
         let k = if fold.unsigned { 0.0 } else { fold.k.max(0.0) as f64 };
-        let width = k.max(fold.km as f64);
-        let mut kept: Vec<u32> = Vec::new();
-        let (mut acc, mut best) = (Interval::point(0.0), Interval::point(0.0));
-        for &j in candidates {
-            let mut iv = match self.spheres.get(j as usize).copied().flatten() {
+        let (spheres, bounds, tapes) = (&self.spheres, &mut self.bounds, &self.tapes);
+        isoray_shape::fold::cull(candidates, k, k.max(fold.km as f64), scale, |j| {
+            let iv = match spheres.get(j as usize).copied().flatten() {
                 Some((c, r)) => isoray_shape::fold::sphere_bound(c, r, bx),
-                None => self.bounds[j as usize].eval(self.tapes[j as usize], bx, None),
+                None => bounds[j as usize].eval(tapes[j as usize], bx, None),
             };
             if fold.unsigned {
-                iv = Interval::unary(UnOp::Abs, iv);
-            }
-            if !kept.is_empty() {
-                let after = below(best.hi, iv.lo) && (k == 0.0 || below(acc.hi + width, iv.lo));
-                if after {
-                    continue; // changes nothing here
-                }
-                let before = below(iv.hi, best.lo) && (k == 0.0 || below(iv.hi + width, acc.lo));
-                if before {
-                    kept.clear(); // restarts the fold here
-                }
-            }
-            if kept.is_empty() {
-                kept.push(j);
-                (acc, best) = (iv, iv);
-                continue;
-            }
-            kept.push(j);
-            best = Interval::new(best.lo.min(iv.lo), best.hi.min(iv.hi));
-            acc = if k > 0.0 {
-                // min(a, b) − h²/(4k) with 0 ≤ h ≤ k.
-                Interval::new(acc.lo.min(iv.lo) - 0.25 * k, acc.hi.min(iv.hi))
+                Interval::unary(UnOp::Abs, iv)
             } else {
-                best
-            };
-        }
-        kept
+                iv
+            }
+        })
+        .0
     }
 
     /// The fold of the objects `kept` (the first starting it) at the points.

@@ -355,6 +355,12 @@ impl Reach {
         self.surface
     }
 
+    /// The domain it was searched in, and the box of the surface in it
+    /// (None: no surface there).
+    pub fn boxes(&self) -> (Aabb, Option<Aabb>) {
+        (self.domain, self.surface)
+    }
+
     /// The parameter beyond which the ray o + t·d, 0 ≤ t ≤ `tmax`, meets
     /// no surface: negative when it meets none at all, +∞ when that is not
     /// known (the ray leaves the domain).

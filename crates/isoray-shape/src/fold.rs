@@ -249,6 +249,61 @@ impl<'t> Fold<'t> {
     }
 }
 
+/// Of the objects `candidates` (in file order) of a fold with smooth-union
+/// width `k` (0: `min`), whose distances over a box are bounded by
+/// `bound(j)`, those that can change the fold anywhere in the box, from
+/// the last one that restarts it there; with `width` ≥ k the same holds
+/// for a material blend of width `width` folded beside it (the nearest
+/// object and the blend weights too). An object is left out when at every
+/// point it lies above the nearest object so far and at least `width`
+/// above the fold so far (the smooth union's correction is then 0 and the
+/// blend weight 0: nothing changes), and it restarts the fold when it lies
+/// below the nearest object so far and at least `width` below the fold so
+/// far (the union is then the object, and its weight 1). `scale`, the
+/// box's largest coordinate, sizes the margin that the f32 evaluation's
+/// rounding needs. Also returns a bound of the fold over the box (of the
+/// objects kept).
+pub fn cull(
+    candidates: &[u32],
+    k: f64,
+    width: f64,
+    scale: f64,
+    mut bound: impl FnMut(u32) -> Interval,
+) -> (Vec<u32>, Interval) {
+    // a < b at every point of the box, whatever the f32 evaluation's rounding.
+    let below = |a: f64, b: f64| a < b - 1e-5 * (a.abs() + b.abs() + scale) - 1e-6;
+    let width = width.max(k);
+    let mut kept: Vec<u32> = Vec::new();
+    let (mut acc, mut best) = (Interval::point(0.0), Interval::point(0.0));
+    for &j in candidates {
+        let iv = bound(j);
+        if !kept.is_empty() {
+            let after = below(best.hi, iv.lo) && (k == 0.0 || below(acc.hi + width, iv.lo));
+            if after {
+                continue; // changes nothing here
+            }
+            let before = below(iv.hi, best.lo) && (k == 0.0 || below(iv.hi + width, acc.lo));
+            if before {
+                kept.clear(); // restarts the fold here
+            }
+        }
+        if kept.is_empty() {
+            kept.push(j);
+            (acc, best) = (iv, iv);
+            continue;
+        }
+        kept.push(j);
+        best = Interval::new(best.lo.min(iv.lo), best.hi.min(iv.hi));
+        acc = if k > 0.0 {
+            // min(a, b) − h²/(4k) with 0 ≤ h ≤ k.
+            Interval::new(acc.lo.min(iv.lo) - 0.25 * k, acc.hi.min(iv.hi))
+        } else {
+            best
+        };
+    }
+    (kept, acc)
+}
+
 /// Bounds of |p − c| − r over the box: the distances from c to the box's
 /// nearest and furthest points, padded for rounding (and for the centre
 /// and radius being recognised, to ~1e-9, rather than read).

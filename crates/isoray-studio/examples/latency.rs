@@ -1,11 +1,12 @@
 //! The studio's latencies, measured in the studio itself: a headless
 //! window (egui_kittest) of the given size on a scene, driven by pointer
-//! events as a user's hand would, with the preview on the GPU renderer
-//! (lavapipe when there is no GPU) or, with `--cpu`, the CPU renderer.
+//! events as a user's hand would, with the preview on the renderer the
+//! studio picks by default (the GPU renderer on a hardware adapter, the CPU
+//! renderer otherwise) or, with `--gpu` or `--cpu`, on that one.
 //!
 //! ```text
 //! cargo run --release -p isoray-studio --example latency -- \
-//!     [--size 1280x800] [--cpu] [--moves 12] SCENE [OPEN_ONLY_SCENE…]
+//!     [--size 1280x800] [--cpu | --gpu] [--moves 12] SCENE [OPEN_ONLY_SCENE…]
 //! ```
 //!
 //! On the first scene: the time to open it (until the first final frame at
@@ -29,7 +30,7 @@ const PATIENCE: Duration = Duration::from_secs(300);
 
 struct Args {
     size: egui::Vec2,
-    cpu: bool,
+    renderer: isoray_studio::preview::PreviewChoice,
     moves: usize,
     scenes: Vec<std::path::PathBuf>,
 }
@@ -37,14 +38,15 @@ struct Args {
 fn args() -> Result<Args, String> {
     let mut a = Args {
         size: egui::vec2(1280.0, 800.0),
-        cpu: false,
+        renderer: Default::default(),
         moves: 12,
         scenes: vec![],
     };
     let mut it = std::env::args().skip(1);
     while let Some(s) = it.next() {
         match s.as_str() {
-            "--cpu" => a.cpu = true,
+            "--cpu" => a.renderer = isoray_studio::preview::PreviewChoice::Cpu,
+            "--gpu" => a.renderer = isoray_studio::preview::PreviewChoice::Gpu,
             "--size" => {
                 let v = it.next().ok_or("--size needs WxH")?;
                 let (w, h) = v.split_once('x').ok_or(format!("--size: expected WxH, found `{v}`"))?;
@@ -67,7 +69,7 @@ fn args() -> Result<Args, String> {
         }
     }
     if a.scenes.is_empty() {
-        return Err("usage: latency [--size WxH] [--cpu] [--moves N] SCENE [OPEN_ONLY_SCENE…]".into());
+        return Err("usage: latency [--size WxH] [--cpu | --gpu] [--moves N] SCENE [OPEN_ONLY_SCENE…]".into());
     }
     Ok(a)
 }
@@ -75,7 +77,7 @@ fn args() -> Result<Args, String> {
 fn open(path: &std::path::Path, a: &Args) -> Harness<'static, Studio> {
     let options = StudioOptions {
         scene: Some(path.to_path_buf()),
-        cpu_only: a.cpu,
+        renderer: a.renderer,
         screenshot: None,
     };
     Harness::builder()

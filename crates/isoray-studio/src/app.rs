@@ -15,7 +15,7 @@ pub mod timeline;
 use crate::document::Document;
 use crate::graph::GraphEditor;
 use crate::orbit::Orbit;
-use crate::preview::{Frame, Preview};
+use crate::preview::{Frame, Preview, PreviewChoice};
 use crate::surfaces::{candidate, Check, Field, FieldError, Mode, Outcome, ParamRow, SurfaceForm};
 
 /// How the studio was started.
@@ -23,8 +23,9 @@ use crate::surfaces::{candidate, Check, Field, FieldError, Mode, Outcome, ParamR
 pub struct StudioOptions {
     /// The scene file to open (None: a new scene).
     pub scene: Option<PathBuf>,
-    /// Render the preview on the CPU even when there is a GPU.
-    pub cpu_only: bool,
+    /// Which renderer draws the preview (`--cpu`, `--gpu`; by default the
+    /// GPU renderer on a hardware adapter, the CPU renderer otherwise).
+    pub renderer: PreviewChoice,
     /// Write a screenshot of the window here once the preview has
     /// converged, then exit.
     pub screenshot: Option<PathBuf>,
@@ -230,7 +231,7 @@ impl Studio {
         };
         let graph = GraphEditor::of(&doc);
         let wake_ctx = ctx.clone();
-        let preview = Preview::start(options.cpu_only, move || wake_ctx.request_repaint());
+        let preview = Preview::start(options.renderer, move || wake_ctx.request_repaint());
         Studio {
             doc,
             preview,
@@ -507,6 +508,14 @@ impl Studio {
             ui.menu_button("View", |ui| {
                 ui.checkbox(&mut self.show_graph, "Graph");
                 ui.checkbox(&mut self.graph.thumbs.enabled, "Node thumbnails");
+                ui.separator();
+                ui.label("Preview renderer");
+                let now = self.preview.choice();
+                for c in [PreviewChoice::Auto, PreviewChoice::Gpu, PreviewChoice::Cpu] {
+                    if ui.radio(now == c, c.label()).clicked() && now != c {
+                        self.choose_renderer(c);
+                    }
+                }
             });
             self.midi_menu(ui);
             ui.menu_button("Edit", |ui| {
@@ -524,6 +533,13 @@ impl Studio {
                 }
             });
         });
+    }
+
+    /// Switches the preview's renderer and draws the scene again with it.
+    pub fn choose_renderer(&mut self, choice: PreviewChoice) {
+        self.options.renderer = choice;
+        self.preview.choose(choice);
+        self.request_preview();
     }
 
     /// Runs `what` now, or first asks about unsaved changes.

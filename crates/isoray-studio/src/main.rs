@@ -4,13 +4,16 @@ use std::path::PathBuf;
 
 use isoray_studio::{Studio, StudioOptions};
 
-const USAGE: &str = "usage: isoray-studio [SCENE.toml] [--screenshot OUT.png] [--size WxH] [--cpu]
+const USAGE: &str = "usage: isoray-studio [SCENE.toml] [--screenshot OUT.png] [--size WxH] [--cpu | --gpu]
 
   SCENE.toml          the scene file to open (a new scene when absent)
   --screenshot OUT    wait until the preview has converged, write a PNG of the
                       whole window to OUT and exit
   --size WxH          the window's size in points (default 1280x800)
-  --cpu               preview with the CPU renderer even when there is a GPU";
+  --cpu               preview with the CPU renderer even when there is a GPU
+  --gpu               preview with the GPU renderer even on a software adapter
+                      (lavapipe, llvmpipe, SwiftShader, WARP), where the CPU
+                      renderer is faster and is the default";
 
 fn parse() -> Result<(StudioOptions, [f32; 2]), String> {
     let mut options = StudioOptions::default();
@@ -33,7 +36,8 @@ fn parse() -> Result<(StudioOptions, [f32; 2]), String> {
                     .filter(|[w, h]| *w >= 64.0 && *h >= 64.0 && *w <= 16384.0 && *h <= 16384.0);
                 size = parsed.ok_or(format!("--size: expected WxH with each from 64 to 16384, found `{v}`"))?;
             }
-            "--cpu" => options.cpu_only = true,
+            "--cpu" => options.renderer = isoray_studio::preview::PreviewChoice::Cpu,
+            "--gpu" => options.renderer = isoray_studio::preview::PreviewChoice::Gpu,
             s if s.starts_with('-') => return Err(format!("unknown option `{s}`\n\n{USAGE}")),
             s => {
                 if options.scene.is_some() {

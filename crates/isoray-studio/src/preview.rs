@@ -1,6 +1,12 @@
 //! The live preview: a worker thread that renders the latest scene it was
-//! given, on the GPU renderer when there is an adapter and otherwise on the
-//! CPU renderer's progressive passes, and publishes frames for the UI.
+//! given, on the GPU renderer when there is a hardware adapter and otherwise
+//! on the CPU renderer's progressive passes, and publishes frames for the UI.
+//!
+//! On a software adapter (lavapipe, llvmpipe, SwiftShader, WARP) the GPU
+//! renderer runs on the same CPU cores as the CPU renderer and is slower
+//! than it on every scene measured (docs/BENCHMARKS.md, "The GPU renderer
+//! beside the CPU renderer"), so [`PreviewChoice::Auto`] takes the CPU
+//! renderer there and says why; [`Preview::choose`] switches.
 //!
 //! A new request cancels the render in progress (the CPU renderer between
 //! tiles, the GPU renderer between bands), so the preview always catches up
@@ -13,6 +19,30 @@ use std::time::Instant;
 use isoray_job::CancelToken;
 use isoray_render::{RenderOptions, TileImage, TileSink};
 use isoray_scene::Scene;
+
+/// Which renderer the user asked the preview to use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PreviewChoice {
+    /// The GPU renderer on a hardware adapter; the CPU renderer when there
+    /// is none or the adapter is a software one (it is slower there).
+    #[default]
+    Auto,
+    /// The GPU renderer whenever there is an adapter, software or not.
+    Gpu,
+    /// The CPU renderer.
+    Cpu,
+}
+
+impl PreviewChoice {
+    /// Its name in menus and on the command line.
+    pub fn label(self) -> &'static str {
+        match self {
+            PreviewChoice::Auto => "Automatic (the faster here)",
+            PreviewChoice::Gpu => "GPU renderer",
+            PreviewChoice::Cpu => "CPU renderer",
+        }
+    }
+}
 
 /// Which renderer draws the preview.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -61,6 +91,58 @@ struct Shared {
     error: Option<String>,
     /// The request being rendered and its cancel token.
     running: Option<(u64, CancelToken)>,
+    /// The renderer choice the worker last took up.
+    choice: PreviewChoice,
+}
+
+/// What the UI asks of the worker.
+enum Message {
+    /// Draw this scene for request `id`.
+    Render(u64, Box<Scene>),
+    /// Use this renderer from now on.
+    Choose(PreviewChoice),
+}
+
+/// The worker's renderers: the GPU one made on first need, and the reason
+/// there is none when making it failed.
+#[derive(Default)]
+struct Renderers {
+    gpu: Option<Result<isoray_gpu::GpuRenderer, String>>,
+}
+
+impl Renderers {
+    /// The renderer `choice` picks, with the status bar's description:
+    /// `Some` GPU renderer, or `None` for the CPU renderer.
+    fn pick(&mut self, choice: PreviewChoice) -> (Option<&mut isoray_gpu::GpuRenderer>, Backend) {
+        if choice == PreviewChoice::Cpu {
+            return (
+                None,
+                Backend::Cpu("chosen in View ▸ Preview renderer or with --cpu".into()),
+            );
+        }
+        let gpu = self
+            .gpu
+            .get_or_insert_with(|| isoray_gpu::GpuRenderer::new().map_err(|e| e.to_string()));
+        match gpu {
+            Err(e) => (None, Backend::Cpu(format!("no GPU adapter: {e}"))),
+            Ok(g) if choice == PreviewChoice::Auto && g.gpu().is_software() => {
+                let why = format!(
+                    "{} is a software adapter, on which the CPU renderer is faster; View ▸ Preview renderer switches",
+                    g.gpu().adapter_name()
+                );
+                (None, Backend::Cpu(why))
+            }
+            Ok(g) => {
+                let name = g.gpu().adapter_name();
+                let name = if g.gpu().is_software() {
+                    format!("{name}, a software adapter (the CPU renderer is faster here)")
+                } else {
+                    name
+                };
+                (Some(g), Backend::Gpu(name))
+            }
+        }
+    }
 }
 
 /// A linear-RGB image and whether the UI has seen its latest pixels.
@@ -77,7 +159,7 @@ struct Canvas {
 /// The preview renderer's handle (the worker stops when it is dropped).
 #[derive(Debug)]
 pub struct Preview {
-    tx: Sender<(u64, Scene)>,
+    tx: Sender<Message>,
     shared: Arc<Mutex<Shared>>,
     next_id: u64,
     /// The worker thread (it ends when `tx` is dropped).
@@ -85,15 +167,15 @@ pub struct Preview {
 }
 
 impl Preview {
-    /// Starts the worker. `cpu_only` skips the GPU; `wake` is called after
-    /// every published frame.
-    pub fn start(cpu_only: bool, wake: impl Fn() + Send + Sync + 'static) -> Preview {
+    /// Starts the worker with the renderer `choice` picks; `wake` is
+    /// called after every published frame.
+    pub fn start(choice: PreviewChoice, wake: impl Fn() + Send + Sync + 'static) -> Preview {
         let (tx, rx) = channel();
         let shared = Arc::new(Mutex::new(Shared::default()));
         let s = shared.clone();
         let worker = std::thread::Builder::new()
             .name("preview".into())
-            .spawn(move || worker(rx, s, cpu_only, wake))
+            .spawn(move || worker(rx, s, choice, wake))
             .expect("a thread for the preview");
         Preview {
             tx,
@@ -111,8 +193,19 @@ impl Preview {
             token.cancel();
         }
         // A closed channel means the worker panicked; the error says so.
-        let _ = self.tx.send((self.next_id, scene));
+        let _ = self.tx.send(Message::Render(self.next_id, Box::new(scene)));
         self.next_id
+    }
+
+    /// Switches the renderer (from the next request on; [`Preview::backend`]
+    /// says which one `choice` gave once the worker has taken it up).
+    pub fn choose(&mut self, choice: PreviewChoice) {
+        let _ = self.tx.send(Message::Choose(choice));
+    }
+
+    /// The renderer choice in force.
+    pub fn choice(&self) -> PreviewChoice {
+        self.lock().choice
     }
 
     /// The latest frame, taken (None when no new one came since): a
@@ -173,35 +266,41 @@ pub fn rgba(color: &[[f32; 3]]) -> Vec<u8> {
     out
 }
 
-fn worker(rx: Receiver<(u64, Scene)>, shared: Arc<Mutex<Shared>>, cpu_only: bool, wake: impl Fn() + Sync) {
+fn worker(rx: Receiver<Message>, shared: Arc<Mutex<Shared>>, choice: PreviewChoice, wake: impl Fn() + Sync) {
     let lock = || shared.lock().unwrap_or_else(|e| e.into_inner());
-    let mut gpu = if cpu_only {
-        lock().backend = Some(Backend::Cpu("asked for with --cpu".into()));
-        None
-    } else {
-        match isoray_gpu::GpuRenderer::new() {
-            Ok(g) => {
-                lock().backend = Some(Backend::Gpu(g.gpu().adapter_name()));
-                Some(g)
-            }
-            Err(e) => {
-                lock().backend = Some(Backend::Cpu(format!("no GPU adapter: {e}")));
-                None
-            }
-        }
-    };
+    let mut renderers = Renderers::default();
+    let mut choice = choice;
+    let backend = renderers.pick(choice).1;
+    {
+        let mut s = lock();
+        s.backend = Some(backend);
+        s.choice = choice;
+    }
     wake();
-    while let Ok(mut job) = rx.recv() {
-        // Only the latest request matters.
-        while let Ok(newer) = rx.try_recv() {
-            job = newer;
+    while let Ok(first) = rx.recv() {
+        // Take every message waiting; only the latest request matters.
+        let mut job = None;
+        for m in std::iter::once(first).chain(rx.try_iter()) {
+            match m {
+                Message::Render(id, scene) => job = Some((id, *scene)),
+                Message::Choose(c) => {
+                    choice = c;
+                    let backend = renderers.pick(choice).1;
+                    let mut s = lock();
+                    s.backend = Some(backend);
+                    s.choice = choice;
+                    drop(s);
+                    wake();
+                }
+            }
         }
-        let (id, scene) = job;
+        let Some((id, scene)) = job else { continue };
+        let gpu = renderers.pick(choice).0;
         let token = CancelToken::new();
         lock().running = Some((id, token.clone()));
         let start = Instant::now();
         let (w, h) = (scene.render.width, scene.render.height);
-        let result = match gpu.as_mut() {
+        let result = match gpu {
             Some(g) => {
                 let opts = isoray_gpu::GpuRenderOptions {
                     cancel: Some(token.clone()),

@@ -5,7 +5,7 @@
 
 use std::time::{Duration, Instant};
 
-use isoray_studio::preview::{rgba as rgba_of, Backend, Frame, Preview};
+use isoray_studio::preview::{rgba as rgba_of, Backend, Frame, Preview, PreviewChoice};
 
 const SCENE: &str = r#"
 [camera]
@@ -49,7 +49,7 @@ fn frames_of(preview: &Preview, id: u64) -> Vec<Frame> {
 #[test]
 fn a_supersampled_preview_refines_from_one_sample_to_the_full_frame() {
     let scene = isoray_scene::load_str(SCENE, "preview.toml", &[]).unwrap();
-    let mut preview = Preview::start(false, || {});
+    let mut preview = Preview::start(PreviewChoice::Gpu, || {});
     let id = preview.request(scene.clone());
     let frames = frames_of(&preview, id);
     let backend = preview.backend().expect("the worker has started");
@@ -101,4 +101,52 @@ fn a_supersampled_preview_refines_from_one_sample_to_the_full_frame() {
         Backend::Cpu(_) => rgba_of(&isoray_render::render(&other, &Default::default()).0.color),
     };
     assert!(last.rgba == want);
+}
+
+/// The renderer's adapter: Some(true) for a software one, None for none.
+fn software_adapter() -> Option<bool> {
+    isoray_gpu::GpuRenderer::new().ok().map(|g| g.gpu().is_software())
+}
+
+#[test]
+fn the_automatic_choice_takes_the_cpu_renderer_on_a_software_adapter_and_the_view_menu_switches() {
+    let scene = isoray_scene::load_str(SCENE, "preview.toml", &[]).unwrap();
+    let mut quick = scene.clone();
+    quick.render.aa = 1;
+    let mut preview = Preview::start(PreviewChoice::Auto, || {});
+    let id = preview.request(quick.clone());
+    let frames = frames_of(&preview, id);
+    let cpu_image = rgba_of(&isoray_render::render(&quick, &Default::default()).0.color);
+    match (software_adapter(), preview.backend().unwrap()) {
+        (Some(true), Backend::Cpu(why)) => {
+            assert!(why.contains("software adapter"), "the status bar says why: {why}");
+            assert!(frames.last().unwrap().rgba == cpu_image, "the CPU renderer's image");
+        }
+        (None, Backend::Cpu(why)) => assert!(why.contains("no GPU adapter"), "{why}"),
+        (Some(false), Backend::Gpu(_)) => {}
+        (adapter, backend) => panic!("software adapter {adapter:?}, yet {backend:?}"),
+    }
+    assert_eq!(preview.choice(), PreviewChoice::Auto);
+
+    // View ▸ Preview renderer ▸ GPU renderer: the GPU renderer's image,
+    // and the status bar names the adapter.
+    preview.choose(PreviewChoice::Gpu);
+    let id = preview.request(quick.clone());
+    let frames = frames_of(&preview, id);
+    if let Ok(mut g) = isoray_gpu::GpuRenderer::new() {
+        let want = rgba_of(&g.render(&quick, &Default::default()).unwrap().0.color);
+        let Backend::Gpu(name) = preview.backend().unwrap() else {
+            panic!("asked for the GPU renderer, got {:?}", preview.backend());
+        };
+        assert!(name.contains(&g.gpu().adapter_name()), "{name}");
+        assert!(frames.last().unwrap().rgba == want, "the GPU renderer's image");
+    }
+    assert_eq!(preview.choice(), PreviewChoice::Gpu);
+
+    // ... and back to the CPU renderer.
+    preview.choose(PreviewChoice::Cpu);
+    let id = preview.request(quick.clone());
+    let frames = frames_of(&preview, id);
+    assert!(matches!(preview.backend().unwrap(), Backend::Cpu(_)));
+    assert!(frames.last().unwrap().rgba == cpu_image);
 }

@@ -21,7 +21,7 @@ fn studio_on(path: &std::path::Path) -> Harness<'static, Studio> {
 fn studio_sized(path: &std::path::Path, size: egui::Vec2) -> Harness<'static, Studio> {
     let options = StudioOptions {
         scene: Some(path.to_path_buf()),
-        cpu_only: true,
+        renderer: isoray_studio::preview::PreviewChoice::Cpu,
         screenshot: None,
     };
     let mut h = Harness::builder()

@@ -66,6 +66,18 @@ impl GpuSession {
                 Some(d) => eprintln!("timing: pipeline built in {:.1} ms", ms(d)),
                 None => eprintln!("timing: pipeline reused"),
             }
+            eprintln!("timing: surfaces' reach found in {:.1} ms", ms(t.reach));
+            let c = &t.cells;
+            if c.cells > 0 {
+                eprintln!(
+                    "timing: fold cells made in {:.1} ms: {} cells, {} leaves, {} levels, longest list {}",
+                    ms(c.build),
+                    c.cells,
+                    c.leaves,
+                    c.depth,
+                    c.longest
+                );
+            }
             if t.passes_ms.is_empty() {
                 eprintln!(
                     "timing: the adapter has no timestamp queries; frame wall time {:.1} ms",
