@@ -97,6 +97,11 @@ pub struct Features {
     pub optics: bool,
     /// A transparent object (shadow rays pass through it).
     pub clear: bool,
+    /// Normals by dual numbers: `render.normals = "analytic"`, or rays
+    /// inside transparent objects (whose unsigned field has them). Without
+    /// it the objects' dual-number functions are not written at all (they
+    /// are most of a module's size, and of its compile time).
+    pub dual: bool,
 }
 
 impl Features {
@@ -106,6 +111,10 @@ impl Features {
             let s = MaterialSample::from(m);
             s.transparency > 0.0 || s.reflectivity.max_element() > 0.0
         };
+        let clear = scene
+            .objects
+            .iter()
+            .any(|o| scene.materials[o.material].transparency > 0.0);
         Features {
             meshes: !scene.meshes.is_empty(),
             dents: scene.objects.iter().any(|o| {
@@ -116,18 +125,17 @@ impl Features {
                         .is_some_and(|m| !matches!(m.mapping, UvMapping::Parametric(_)))
             }),
             optics: scene.materials.iter().any(optical),
-            clear: scene
-                .objects
-                .iter()
-                .any(|o| scene.materials[o.material].transparency > 0.0),
+            clear,
+            dual: clear || scene.render.normals == NormalMethod::Analytic,
         }
     }
 
     /// The constants of the tracer (`kernel/*.wgsl`).
     fn wgsl(self) -> String {
         format!(
-            "const HAS_MESHES: bool = {};\nconst HAS_DENTS: bool = {};\nconst HAS_OPTICS: bool = {};\nconst HAS_CLEAR: bool = {};\n",
-            self.meshes, self.dents, self.optics, self.clear
+            "const HAS_MESHES: bool = {};\nconst HAS_DENTS: bool = {};\nconst HAS_OPTICS: bool = {};\n\
+             const HAS_CLEAR: bool = {};\nconst HAS_DUAL: bool = {};\n",
+            self.meshes, self.dents, self.optics, self.clear, self.dual
         )
     }
 }
@@ -175,11 +183,13 @@ impl SceneCode {
                 for (i, o) in scene.objects.iter().enumerate() {
                     let tape = o.shape.tape();
                     let f = emit_tape(tape, &format!("iso_o{i}"), "iso_in", base);
-                    let g = emit_tape_dual(tape, &format!("iso_g{i}"), "iso_in", base);
                     source.push_str(&f.code);
-                    source.push_str(&g.code);
                     value_cases.push_str(&format!("        case {i}u: {{ return iso_o{i}(p); }}\n"));
-                    dual_cases.push_str(&format!("        case {i}u: {{ return iso_g{i}(p); }}\n"));
+                    if features.dual {
+                        let g = emit_tape_dual(tape, &format!("iso_g{i}"), "iso_in", base);
+                        source.push_str(&g.code);
+                        dual_cases.push_str(&format!("        case {i}u: {{ return iso_g{i}(p); }}\n"));
+                    }
                     base += f.uniform_slots.len() as u32;
                     objects.push(ObjectCode {
                         uniform_slots: f.uniform_slots,
@@ -192,6 +202,7 @@ impl SceneCode {
                      fn iso_object_dual(i: u32, p: vec3<f32>) -> vec4<f32> {{\n    switch i {{\n{dual_cases}        \
                      default: {{ return vec4<f32>(1e9, 0.0, 0.0, 0.0); }}\n    }}\n}}\n"
                 ));
+                source.push_str(&all_objects(scene.objects.len(), features.dual));
             }
             Kernel::Interpreted => {
                 for (i, o) in scene.objects.iter().enumerate() {
@@ -215,6 +226,7 @@ impl SceneCode {
                      fn iso_object_dual(i: u32, p: vec3<f32>) -> vec4<f32> {\n    let o = objs[i];\n    \
                      return iso_run_dual(o.code_start, o.code_len, o.out_slot, p);\n}\n",
                 );
+                source.push_str(&all_objects_looped(scene.objects.len()));
             }
         }
         if code.is_empty() {
@@ -277,6 +289,46 @@ impl SceneCode {
             })
             .collect()
     }
+}
+
+/// `iso_all(p)` and `iso_all_dual(p)`: every object's distance at p in
+/// one array (`N_OBJECTS` long), each object's function called once in
+/// straight-line code. A loop over the objects that calls
+/// `iso_object(i, p)` costs every case of its `switch` at every turn on a
+/// driver that runs divergent branches with lanes masked off (lavapipe),
+/// so n objects cost n² evaluations; read from this array they cost n.
+/// Without `with_dual` (see [`Features::dual`]) `iso_all_dual` is a stub.
+fn all_objects(n: usize, with_dual: bool) -> String {
+    let mut value = String::new();
+    let mut dual = String::new();
+    for i in 0..n {
+        value.push_str(&format!("    d[{i}] = iso_o{i}(p);\n"));
+        if with_dual {
+            dual.push_str(&format!("    d[{i}] = iso_g{i}(p);\n"));
+        }
+    }
+    format!(
+        "const N_OBJECTS: u32 = {}u;\nconst COMPILED_OBJECTS: bool = true;\n\
+         fn iso_all(p: vec3<f32>) -> array<f32, N_OBJECTS> {{\n    var d: array<f32, N_OBJECTS>;\n{value}    return d;\n}}\n\
+         fn iso_all_dual(p: vec3<f32>) -> array<vec4<f32>, N_OBJECTS> {{\n    \
+         var d: array<vec4<f32>, N_OBJECTS>;\n{dual}    return d;\n}}\n",
+        n.max(1)
+    )
+}
+
+/// [`all_objects`] for the interpreted kernel: a loop over the programs
+/// (`COMPILED_OBJECTS` false: the tracer calls `iso_object(i, p)` in its
+/// loops instead, as the interpreter has no `switch` to pay for).
+fn all_objects_looped(n: usize) -> String {
+    format!(
+        "const N_OBJECTS: u32 = {}u;\nconst COMPILED_OBJECTS: bool = false;\n\
+         fn iso_all(p: vec3<f32>) -> array<f32, N_OBJECTS> {{\n    var d: array<f32, N_OBJECTS>;\n    \
+         for (var i = 0u; i < cfg.n_objects; i++) {{ d[i] = iso_object(i, p); }}\n    return d;\n}}\n\
+         fn iso_all_dual(p: vec3<f32>) -> array<vec4<f32>, N_OBJECTS> {{\n    \
+         var d: array<vec4<f32>, N_OBJECTS>;\n    \
+         for (var i = 0u; i < cfg.n_objects; i++) {{ d[i] = iso_object_dual(i, p); }}\n    return d;\n}}\n",
+        n.max(1)
+    )
 }
 
 /// Little-endian words for a storage buffer.

@@ -38,6 +38,11 @@ fn smooth_union_dual(x: vec4<f32>, y: vec4<f32>) -> vec4<f32> {
 
 fn unsigned_field(kind: u32) -> bool { return kind == F_SURFACES || kind == F_CLEAR_SURFACES; }
 
+// Whether a loop over the objects reads their distances from iso_all (the
+// compiled kernel without cells: every object's code once, in a row) or
+// calls iso_object(i, p) per object (the interpreter, or cells' lists).
+const ALL_AT_ONCE: bool = COMPILED_OBJECTS && !USE_CELLS;
+
 // ---- fold cells (isoray-gpu's cells: the objects that can change each
 // field's fold in a cell of an octree over the domain) ----
 @group(0) @binding(13) var<storage, read> cells: array<u32>;
@@ -107,10 +112,14 @@ fn field(kind: u32, p: vec3<f32>) -> f32 {
     var acc = EMPTY;
     var have = false;
     let list = cell_list(kind, p);
+    // Without cells every object is evaluated once, up front (iso_all).
+    var ds: array<f32, N_OBJECTS>;
+    if (ALL_AT_ONCE) { ds = iso_all(p); }
     for (var q = 0u; q < list.y; q++) {
         let i = list_object(list, q, kind);
         if (i == NO_CELL) { continue; }
-        var d = iso_object(i, p);
+        var d: f32;
+        if (ALL_AT_ONCE) { d = ds[i]; } else { d = iso_object(i, p); }
         if (unsigned_field(kind)) { d = abs(d); }
         if (!have) {
             acc = d;
@@ -128,10 +137,13 @@ fn field_dual(kind: u32, p: vec3<f32>) -> vec4<f32> {
     var acc = vec4<f32>(EMPTY, 0.0, 0.0, 0.0);
     var have = false;
     let list = cell_list(kind, p);
+    var ds: array<vec4<f32>, N_OBJECTS>;
+    if (ALL_AT_ONCE) { ds = iso_all_dual(p); }
     for (var q = 0u; q < list.y; q++) {
         let i = list_object(list, q, kind);
         if (i == NO_CELL) { continue; }
-        var d = iso_object_dual(i, p);
+        var d: vec4<f32>;
+        if (ALL_AT_ONCE) { d = ds[i]; } else { d = iso_object_dual(i, p); }
         if (unsigned_field(kind)) { d = dual_abs(d); }
         if (!have) {
             acc = d;
@@ -150,8 +162,8 @@ const N_DUAL: u32 = 3u;
 
 fn gradient(kind: u32, p: vec3<f32>, mode: u32) -> vec3<f32> {
     // A divergent branch runs for every lane on lavapipe: the dual path is
-    // reached only where some ray can ask for it (uniform conditions).
-    if (cfg.normals == N_DUAL || HAS_CLEAR) {
+    // compiled only where some ray can ask for it (pack::Features::dual).
+    if (HAS_DUAL) {
         if (mode == N_DUAL) {
             n_evals += 1u;
             return field_dual(kind, p).yzw;

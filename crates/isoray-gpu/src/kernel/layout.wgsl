@@ -16,7 +16,7 @@
 //   pixels.wgsl       cameras, samples, views and the entry points
 // The generated part before these files defines `iso_in`, the prelude,
 // `iso_object(i, p)` and `iso_object_dual(i, p)`, and the constants
-// HAS_MESHES, HAS_DENTS, HAS_OPTICS, HAS_CLEAR (what of the tracer the
+// HAS_MESHES, HAS_DENTS, HAS_OPTICS, HAS_CLEAR, HAS_DUAL (what of the tracer the
 // scene can reach: see pack::Features) and USE_CELLS; everything a scene sets
 // (settings, camera, lights, materials, placements, inputs) is read from
 // the buffers below, so changing it never rebuilds this pipeline.

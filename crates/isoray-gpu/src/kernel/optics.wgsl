@@ -40,9 +40,12 @@ fn nearest_clear(p: vec3<f32>) -> u32 {
     if (cfg.n_objects <= 1u) { return 0u; }
     var best = iso_inf();
     var obj = 0u;
+    var ds: array<f32, N_OBJECTS>;
+    if (COMPILED_OBJECTS) { ds = iso_all(p); }
     for (var j = 0u; j < cfg.n_objects; j++) {
         if (!is_clear(j)) { continue; }
-        let d = abs(iso_object(j, p));
+        var d: f32;
+        if (COMPILED_OBJECTS) { d = abs(ds[j]); } else { d = abs(iso_object(j, p)); }
         n_evals += 1u;
         if (d < best) { best = d; obj = j; }
     }

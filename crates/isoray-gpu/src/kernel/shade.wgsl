@@ -122,9 +122,12 @@ fn material_at(p: vec3<f32>, unsigned: bool) -> Surface {
     if (list.y > 1u) {
         var acc = 0.0;
         var best = 0.0;
+        var ds: array<f32, N_OBJECTS>;
+        if (ALL_AT_ONCE) { ds = iso_all(p); }
         for (var q = 0u; q < list.y; q++) {
             let j = list_object(list, q, F_SCENE);
-            let b = iso_object(j, p);
+            var b: f32;
+            if (ALL_AT_ONCE) { b = ds[j]; } else { b = iso_object(j, p); }
             n_evals += 1u;
             var key = b;
             if (unsigned) { key = abs(b); }

@@ -42,9 +42,12 @@ fn touching(p: vec3<f32>, nearest: u32) -> Touching {
     t.len = 1u;
     if (cfg.n_clear < 2u) { return t; }
     let near = 4.0 * OFFSET * cfg.hit_eps;
+    var ds: array<f32, N_OBJECTS>;
+    if (COMPILED_OBJECTS) { ds = iso_all(p); }
     for (var j = 0u; j < cfg.n_objects; j++) {
         if (!is_clear(j)) { continue; }
-        let d = iso_object(j, p);
+        var d: f32;
+        if (COMPILED_OBJECTS) { d = ds[j]; } else { d = iso_object(j, p); }
         n_evals += 1u;
         if (abs(d) < near && j != nearest && t.len < 6u) {
             t.objs[t.len] = j;
