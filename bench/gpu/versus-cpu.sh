@@ -66,6 +66,7 @@ LIMIT=${GPU_TIMEOUT:-300}
 gpu_run() {
   local bin=$1 cache=()
   shift
+  rm -f "$TMP/gpu.png"
   if [ -n "${COLD:-}" ]; then
     rm -rf "$TMP/mesa"
     cache=(env MESA_SHADER_CACHE_DIR="$TMP/mesa")
@@ -148,6 +149,7 @@ for y in range(h):
 print(f"{off} ({100.0 * off / (w * h):.2f} %)")
 EOF
 )
+  [ -f "$TMP/gpu.png" ] || diff="-"
   if [ -n "${BEFORE:-}" ]; then
     b=$(pick "${before[@]}")
     printf '| %s | %s | %s | %s | %s | %s | %s |\n' "$f" "$c" "$b" "$g" "$(ratio_of "$b" "$c")" "$ratio" "$diff"
