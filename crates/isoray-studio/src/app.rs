@@ -284,6 +284,12 @@ impl Studio {
         self.wanted
     }
 
+    /// The renderer the user chose for the preview (View ▸ Preview
+    /// renderer, `--gpu`, `--cpu`).
+    pub fn renderer_choice(&self) -> PreviewChoice {
+        self.options.renderer
+    }
+
     /// Which renderer draws the preview (None until it has started).
     pub fn backend(&self) -> Option<crate::preview::Backend> {
         self.preview.backend()

@@ -117,7 +117,7 @@ impl Renderers {
         if choice == PreviewChoice::Cpu {
             return (
                 None,
-                Backend::Cpu("chosen in View ▸ Preview renderer or with --cpu".into()),
+                Backend::Cpu("chosen in View > Preview renderer or with --cpu".into()),
             );
         }
         let gpu = self
@@ -127,7 +127,7 @@ impl Renderers {
             Err(e) => (None, Backend::Cpu(format!("no GPU adapter: {e}"))),
             Ok(g) if choice == PreviewChoice::Auto && g.gpu().is_software() => {
                 let why = format!(
-                    "{} is a software adapter, on which the CPU renderer is faster; View ▸ Preview renderer switches",
+                    "{} is a software adapter, on which the CPU renderer is faster; View > Preview renderer switches",
                     g.gpu().adapter_name()
                 );
                 (None, Backend::Cpu(why))

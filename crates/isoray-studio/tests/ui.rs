@@ -893,3 +893,40 @@ fn midi_learn_maps_the_last_control_to_the_clicked_slider_and_a_take_is_recorded
     h.run_steps(2);
     assert_eq!(h.state().document().text(), original);
 }
+
+/// View ▸ Preview renderer switches the preview's renderer, and the status
+/// bar's backend follows (the GPU renderer where there is an adapter).
+#[test]
+fn the_view_menu_switches_the_preview_renderer() {
+    use isoray_studio::preview::{Backend, PreviewChoice};
+    let (_dir, path, _) = example_copy("showcase.toml");
+    let mut h = studio_on(&path);
+    assert_eq!(h.state().renderer_choice(), PreviewChoice::Cpu);
+    let choose = |h: &mut Harness<'static, Studio>, label: &str| {
+        // The menu bar's View (the playground has a "View" choice too).
+        h.get_all_by_label("View").next().unwrap().click();
+        h.run_steps(2);
+        h.get_by_label(label).click();
+        h.run_steps(2);
+    };
+    let wait_for = |h: &mut Harness<'static, Studio>, gpu: bool| {
+        let start = std::time::Instant::now();
+        while start.elapsed() < std::time::Duration::from_secs(120) {
+            h.run_steps(1);
+            match h.state().backend() {
+                Some(Backend::Gpu(_)) if gpu => return true,
+                Some(Backend::Cpu(_)) if !gpu => return true,
+                _ => std::thread::sleep(std::time::Duration::from_millis(20)),
+            }
+        }
+        false
+    };
+    choose(&mut h, "GPU renderer");
+    assert_eq!(h.state().renderer_choice(), PreviewChoice::Gpu);
+    if isoray_gpu::GpuRenderer::new().is_ok() {
+        assert!(wait_for(&mut h, true), "the preview moved to the GPU renderer");
+    }
+    choose(&mut h, "CPU renderer");
+    assert_eq!(h.state().renderer_choice(), PreviewChoice::Cpu);
+    assert!(wait_for(&mut h, false), "and back to the CPU renderer");
+}
