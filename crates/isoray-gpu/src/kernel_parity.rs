@@ -1,6 +1,8 @@
 //! The per-function parity harness: each WGSL twin of an isoray-shade
 //! function (lights, Phong and Blinn-Phong, Fresnel and the interface
-//! split, the material blend and mix, the checker, Beer–Lambert) runs on
+//! split, the material blend and mix, the checker, Beer–Lambert) and of
+//! `Scene::dent_normal` (planar and spherical maps, with and without
+//! parallax occlusion, whose uv is `parallax_uv`'s) runs on
 //! the GPU at sampled inputs inside the tracer's own module, and is held to
 //! the Rust function with tolerances, as the evaluator conformance suite
 //! holds the tapes: not only whole images.
@@ -68,6 +70,7 @@ fn probe(@builtin(global_invocation_id) id: vec3<u32>) {
             put_f(10u, m.transparency); put_f(11u, m.ior); put_f(12u, bitcast<f32>(m.model));
             put_f(13u, bitcast<f32>(m.fresnel)); put_v(14u, m.absorption);
         }
+        case 11u: { put_v(0u, dent_normal(pu(1u), pv(2u), pv(5u), pv(8u))); }
         default: {}
     }
 }
@@ -144,10 +147,45 @@ fn run(scene: &Scene, records: &[Record]) -> Option<Vec<[u32; OUT]>> {
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
+    // What dent_normal reads: the settings (parallax), the objects (their
+    // dent headers) and the dent maps.
+    let (dent_words, dent_offsets) = crate::pack::dents(scene, &mut Default::default());
+    let band = crate::pack::Band {
+        x0: 0,
+        y0: 0,
+        width: scene.render.width,
+        height: scene.render.height,
+    };
+    let scratch = crate::pack::Scratch::of(scene, Kernel::Compiled, false);
+    let reaches = isoray_render::reaches(scene, scene.camera.position, Some(1));
+    let settings = crate::pack::settings(scene, band, false, scratch, None, &reaches);
+    let buffer = |label: &str, bytes: &[u8], usage: wgpu::BufferUsages| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytes,
+            usage,
+        })
+    };
+    let settings = buffer("settings", bytemuck::bytes_of(&settings), wgpu::BufferUsages::UNIFORM);
+    let objects = crate::layout::bytes_of_all(&code.objects(scene, &dent_offsets));
+    let objects = buffer("objects", &objects, wgpu::BufferUsages::STORAGE);
+    let dents = buffer("dents", &dent_words.bytes(), wgpu::BufferUsages::STORAGE);
     let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("probe"),
         layout: &pipeline.get_bind_group_layout(0),
         entries: &[
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: settings.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: objects.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 12,
+                resource: dents.as_entire_binding(),
+            },
             wgpu::BindGroupEntry {
                 binding: 20,
                 resource: input.as_entire_binding(),
@@ -517,4 +555,106 @@ fn the_harness_sees_a_wrong_answer() {
     };
     assert_eq!(out[0][0], lights::hash(12345));
     assert_ne!(out[0][0], lights::hash(12345) ^ 1);
+}
+
+/// A ball with a spherical dent map and a turned plate with a planar one,
+/// each struck once; `parallax` is `render.parallax`.
+fn dented(parallax: &str) -> Scene {
+    use isoray_dent::field::March;
+    use isoray_dent::imprint::{imprint_texel, Sphere};
+    let text = format!(
+        "[render]\nparallax = \"{parallax}\"\n\
+         [[object]]\nshape = \"sphere(p, 0.5)\"\nposition = [0.4, 0.2, -0.3]\n\
+         dents = \"bump\"\ndent_map = {{ size = 128, range = 0.4, uv = \"spherical\", extent = 0.5 }}\n\
+         [[object]]\nshape = \"box(p, vec3(1.0, 0.1, 1.0))\"\nrotation = [0.0, 20.0, 0.0]\n\
+         dents = \"bump\"\ndent_map = {{ size = 128, range = 0.4, uv = \"planar-xz\", extent = 1.0 }}\n"
+    );
+    let mut s = isoray_scene::load_str(&text, "dented.toml", &[]).unwrap();
+    let ball = |p: [f64; 3]| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt() - 0.5;
+    let plate = |p: [f64; 3]| {
+        let q = [p[0].abs() - 1.0, p[1].abs() - 0.1, p[2].abs() - 1.0];
+        let o = q.map(|x| x.max(0.0));
+        (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt() + q[0].max(q[1]).max(q[2]).min(0.0)
+    };
+    type Own<'a> = &'a dyn Fn([f64; 3]) -> f64;
+    let strikes: [(Own, [f64; 3], f64); 2] = [(&ball, [0.0, 0.7, 0.0], 0.3), (&plate, [0.2, 0.34, 0.1], 0.3)];
+    for (i, (own, c, r)) in strikes.into_iter().enumerate() {
+        let mut maps = s.objects[i].physics.dent_map.blank().unwrap();
+        let dent = |p: [f64; 3]| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt() - r;
+        let mapping = maps.mapping.clone();
+        let out = imprint_texel(
+            &mut maps.height,
+            &mapping,
+            &own,
+            &dent,
+            Sphere { centre: c, radius: r },
+            March::default(),
+        );
+        assert!(out.lowered > 20, "object {i}: {} texels lowered", out.lowered);
+        maps.update_normals();
+        s.objects[i].physics.maps = Some(std::sync::Arc::new(maps));
+    }
+    s
+}
+
+#[test]
+fn dent_normals_on_the_gpu_match_the_scenes() {
+    for parallax in ["none", "occlusion"] {
+        let scene = dented(parallax);
+        let mut rng = Rng(7);
+        let mut records = Vec::new();
+        let mut wanted = Vec::new();
+        for i in 0..512 {
+            // Points on each undented surface around its dent, seen from above.
+            let (obj, p, n) = if i % 2 == 0 {
+                let mut d = rng.unit();
+                d.y = d.y.abs() + 0.8;
+                let d = d.normalize();
+                (0u32, Vec3::new(0.4, 0.2, -0.3) + d * 0.5, d)
+            } else {
+                let (c, s) = 20f32.to_radians().sin_cos();
+                let (x, z) = (rng.range(-0.5, 0.8), rng.range(-0.5, 0.7));
+                // The plate turned by 20° about y: its top at y = 0.1.
+                let p = Vec3::new(x * s + z * c, 0.1, -x * c + z * s);
+                (1u32, p, Vec3::Y)
+            };
+            let mut e = rng.unit();
+            if e.dot(n) < 0.2 {
+                e = (e + n * 1.5).normalize();
+            }
+            records.push(Record::new(11).u(1, obj).v(2, p).v(5, n).v(8, e));
+            let f = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
+            let want = scene
+                .dent_normal(obj as usize, f(p), f(n), f(e))
+                .map_or(n, |w| Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32));
+            wanted.push((obj, p, n, want));
+        }
+        let Some(out) = run(&scene, &records) else { return };
+        let mut tilted = 0;
+        let mut failures = Vec::new();
+        for (o, &(obj, p, n, want)) in out.iter().zip(&wanted) {
+            let got = vec(o, 0);
+            tilted += (want.dot(n) < 0.999) as usize;
+            // The GPU's texel normals are packed in 2×16-bit snorm.
+            if !close3(got, want, 2e-3) {
+                failures.push(format!("object {obj} at {p}, n {n}: GPU {got}, CPU {want}"));
+            }
+        }
+        eprintln!(
+            "parallax {parallax}: {tilted} of {} normals tilted by a dent, {} differ",
+            wanted.len(),
+            failures.len()
+        );
+        assert!(
+            tilted > 20,
+            "{parallax}: only {tilted} sampled normals are tilted by a dent"
+        );
+        assert!(
+            failures.len() <= wanted.len() / 100,
+            "{parallax}: {} of {} dent normals differ:\n{}",
+            failures.len(),
+            wanted.len(),
+            failures[..failures.len().min(10)].join("\n")
+        );
+    }
 }
