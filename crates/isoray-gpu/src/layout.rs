@@ -191,14 +191,6 @@ gpu_struct! {
         parallax: u32,
         /// Parallax steps.
         parallax_steps: u32,
-        /// 1 when some material reflects or is transparent.
-        any_optical: u32,
-        /// Padding.
-        pad1: u32,
-        /// Padding.
-        pad2: u32,
-        /// Padding.
-        pad3: u32,
         /// The scene field's reach ([`isoray_render::reach::Reach`]): 0
         /// unknown (rays are not cut), 1 no surface in the domain, 2 the
         /// surface's box.
@@ -382,9 +374,14 @@ mod tests {
         (fields, *span as usize)
     }
 
+    /// (name, offset, size) of each field of the Rust type.
+    fn fields<T: Layout>() -> Vec<(String, usize, usize)> {
+        T::FIELDS.iter().map(|&(n, o, s)| (n.to_string(), o, s)).collect()
+    }
+
     fn check<T: Layout>(module: &naga::Module) {
         let (wgsl, span) = reflected(module, T::NAME);
-        let rust: Vec<(String, usize, usize)> = T::FIELDS.iter().map(|&(n, o, s)| (n.to_string(), o, s)).collect();
+        let rust = fields::<T>();
         assert_eq!(rust, wgsl, "{}: the Rust fields against the WGSL members", T::NAME);
         assert_eq!(
             std::mem::size_of::<T>(),
@@ -412,8 +409,7 @@ mod tests {
                       @group(0) @binding(0) var<storage, read> l: array<Light>;\n";
         let module = naga::front::wgsl::parse_str(source).unwrap();
         let (wgsl, _) = reflected(&module, "Light");
-        let rust: Vec<(String, usize, usize)> = Light::FIELDS.iter().map(|&(n, o, s)| (n.to_string(), o, s)).collect();
-        assert_ne!(rust, wgsl);
+        assert_ne!(fields::<Light>(), wgsl);
         assert_eq!(wgsl[0], ("samples".to_string(), 0, 4));
     }
 }

@@ -107,10 +107,6 @@ pub struct Features {
 impl Features {
     /// The scene's.
     pub fn of(scene: &Scene) -> Features {
-        let optical = |m: &isoray_scene::Material| {
-            let s = MaterialSample::from(m);
-            s.transparency > 0.0 || s.reflectivity.max_element() > 0.0
-        };
         let clear = scene
             .objects
             .iter()
@@ -124,7 +120,7 @@ impl Features {
                         .as_ref()
                         .is_some_and(|m| !matches!(m.mapping, UvMapping::Parametric(_)))
             }),
-            optics: scene.materials.iter().any(optical),
+            optics: scene.materials.iter().any(|m| MaterialSample::from(m).is_optical()),
             clear,
             dual: clear || scene.render.normals == NormalMethod::Analytic,
         }
@@ -388,10 +384,7 @@ pub(crate) struct Scratch {
 impl Scratch {
     /// What the scene needs with `kernel` (and the AOVs or not).
     pub(crate) fn of(scene: &Scene, kernel: Kernel, aovs: bool) -> Scratch {
-        let optical = scene.materials.iter().any(|m| {
-            let s = MaterialSample::from(m);
-            s.transparency > 0.0 || s.reflectivity.max_element() > 0.0
-        });
+        let optical = scene.materials.iter().any(|m| MaterialSample::from(m).is_optical());
         let stack_cap = if optical && scene.render.max_depth > 0 {
             scene.render.max_depth + 1
         } else {
@@ -490,10 +483,6 @@ pub(crate) fn settings(
         isoray_scene::Parallax::Steep => 2,
         isoray_scene::Parallax::Occlusion => 3,
     };
-    let optical = scene.materials.iter().any(|m| {
-        let s = MaterialSample::from(m);
-        s.transparency > 0.0 || s.reflectivity.max_element() > 0.0
-    });
     Settings {
         width: w,
         height: h,
@@ -571,7 +560,6 @@ pub(crate) fn settings(
         raster_stride: raster.unwrap_or(0),
         parallax,
         parallax_steps: r.parallax_steps,
-        any_optical: optical as u32,
         ..reach_settings(reaches)
     }
 }

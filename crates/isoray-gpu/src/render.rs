@@ -89,6 +89,17 @@ pub enum FoldCells {
     Off,
 }
 
+impl FoldCells {
+    /// Whether the tracer reads cells on `gpu`.
+    fn on(self, gpu: &Gpu) -> bool {
+        match self {
+            FoldCells::Auto => !gpu.is_software(),
+            FoldCells::On => true,
+            FoldCells::Off => false,
+        }
+    }
+}
+
 /// What a frame cost.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct GpuTiming {
@@ -164,7 +175,7 @@ impl GpuRenderer {
 
     /// A renderer on `gpu`.
     pub fn with_gpu(gpu: Gpu) -> GpuRenderer {
-        let cells = !gpu.is_software();
+        let cells = FoldCells::Auto.on(&gpu);
         GpuRenderer {
             gpu,
             program: None,
@@ -177,11 +188,7 @@ impl GpuRenderer {
     /// Sets whether the tracer reads fold cells (the next frame builds a
     /// new pipeline when that changes it).
     pub fn set_fold_cells(&mut self, cells: FoldCells) {
-        let on = match cells {
-            FoldCells::Auto => !self.gpu.is_software(),
-            FoldCells::On => true,
-            FoldCells::Off => false,
-        };
+        let on = cells.on(&self.gpu);
         if on != self.cells {
             self.cells = on;
             self.program = None;
@@ -340,37 +347,26 @@ impl GpuRenderer {
         let gpu = &self.gpu;
         let device = &gpu.device;
         let (w, h) = (scene.render.width, scene.render.height);
-        let storage = |label: &str, words: &Words| {
+        let storage = |label: &str, bytes: &[u8]| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
-                contents: &words.bytes(),
+                contents: bytes,
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
         let inputs = Words(program.code.inputs(scene).iter().map(|x| x.to_bits()).collect());
-        let in_buf = storage("iso_in", &inputs);
-        let structs = |label: &str, bytes: Vec<u8>| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &bytes,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        };
-        let lights = structs("lights", layout::bytes_of_all(&pack::lights(scene)));
-        let mats = structs("materials", layout::bytes_of_all(&pack::materials(scene)));
+        let in_buf = storage("iso_in", &inputs.bytes());
+        let lights = storage("lights", &layout::bytes_of_all(&pack::lights(scene)));
+        let mats = storage("materials", &layout::bytes_of_all(&pack::materials(scene)));
         let (dent_words, dent_offsets) = pack::dents(scene, &mut self.dent_cache);
-        let objs = structs(
+        let objs = storage(
             "objects",
-            layout::bytes_of_all(&program.code.objects(scene, &dent_offsets)),
+            &layout::bytes_of_all(&program.code.objects(scene, &dent_offsets)),
         );
-        let dent_buf = storage("dents", &dent_words);
-        let code_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("programs"),
-            contents: &Words::bytes_of(&program.code.code),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let env = storage("environment", &pack::environment(scene));
-        let mesh_buf = storage("meshes", &pack::meshes(scene));
+        let dent_buf = storage("dents", &dent_words.bytes());
+        let code_buf = storage("programs", &Words::bytes_of(&program.code.code));
+        let env = storage("environment", &pack::environment(scene).bytes());
+        let mesh_buf = storage("meshes", &pack::meshes(scene).bytes());
         // Where the surfaces end (the CPU's reach): rays past it stop
         // marching. Searched with the CPU renderer's budget for the frame.
         let reach_start = Instant::now();
@@ -387,7 +383,7 @@ impl GpuRenderer {
             cells::none()
         };
         cell_stats.build = cells_start.elapsed();
-        let cell_buf = storage("cells", &cell_words);
+        let cell_buf = storage("cells", &cell_words.bytes());
         let timestamps = opts.timing && device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let mut passes_ms = Vec::new();
         // The meshes' raster prepass, ahead of the bands on the same queue.
@@ -412,7 +408,7 @@ impl GpuRenderer {
         }
         let ids_buf = match &ids {
             Some(r) => r.buffer.clone(),
-            None => storage("no mesh ids", &Words(vec![0])),
+            None => storage("no mesh ids", &Words::bytes_of(&[0])),
         };
         let stats_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("stats"),

@@ -41,7 +41,6 @@ struct Settings {
     ao_all: u32, amb_r: f32, amb_g: f32, amb_b: f32,
     fixed_march: u32, fixed_step: f32, aa_pattern: u32, shadow_eps: f32,
     raster: u32, raster_stride: u32, parallax: u32, parallax_steps: u32,
-    any_optical: u32, pad1: u32, pad2: u32, pad3: u32,
     // The surfaces' reach (isoray-render's Reach): 0 unknown, 1 no surface
     // in the domain, 2 the surface's box.
     reach_scene: u32, reach_rest: u32, pad4: u32, pad5: u32,
