@@ -1,6 +1,7 @@
 //! Evaluating a shape tape at points in a compute pass: a tape's compiled
 //! WGSL function, or its program run by the interpreter.
 
+use isoray_shape::wgsl::interval::INTERVAL_PRELUDE;
 use isoray_shape::wgsl::{interpreter, Program, WgslFunction, PRELUDE};
 use wgpu::util::DeviceExt;
 
@@ -17,12 +18,12 @@ pub struct PointShader {
 
 const WORKGROUP: u32 = 64;
 
-/// The compute shader whose lanes write `out[i] = {call}` at point `p`,
-/// after `code` (functions reading `iso_in` and, for the interpreter,
-/// `iso_code`).
-fn module(code: &str, call: &str) -> String {
+/// The compute shader whose lane i runs `lane` (which reads the lane's
+/// part of `points` and writes its part of `out`, `outputs` words), after
+/// `code` (functions reading `iso_in` and, for the interpreter, `iso_code`).
+fn module(code: &str, outputs: u32, lane: &str) -> String {
     format!(
-        "{PRELUDE}\n@group(0) @binding(0) var<storage, read> iso_in: array<f32>;\n\
+        "{PRELUDE}\n{INTERVAL_PRELUDE}\n@group(0) @binding(0) var<storage, read> iso_in: array<f32>;\n\
          @group(0) @binding(1) var<storage, read> points: array<f32>;\n\
          @group(0) @binding(2) var<storage, read_write> out: array<f32>;\n\
          @group(0) @binding(3) var<storage, read> iso_code: array<u32>;\n\
@@ -32,17 +33,37 @@ fn module(code: &str, call: &str) -> String {
          @compute @workgroup_size({WORKGROUP})\n\
          fn main(@builtin(global_invocation_id) id: vec3<u32>) {{\n\
          \x20   let i = id.x;\n\
-         \x20   if (i >= arrayLength(&out)) {{ return; }}\n\
-         \x20   let p = vec3<f32>(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]);\n\
+         \x20   if ({outputs}u * i >= arrayLength(&out)) {{ return; }}\n\
          \x20   iso_reg_base = i * iso_code[2];\n\
-         \x20   out[i] = {call};\n\
+         {lane}\
          }}\n"
     )
 }
 
+/// The lane of a point shader: `out[i] = {call}` at the point `p`.
+fn point_lane(call: &str) -> String {
+    format!("    let p = vec3<f32>(points[3u * i], points[3u * i + 1u], points[3u * i + 2u]);\n    out[i] = {call};\n")
+}
+
 /// The compute shader around `function` (named `name`, reading `iso_in`).
 pub fn point_module(function: &WgslFunction, name: &str) -> String {
-    module(&function.code, &format!("{name}(p)"))
+    module(&function.code, 1, &point_lane(&format!("{name}(p)")))
+}
+
+/// The compute shader around the interval `function` (named `name`, as
+/// [`isoray_shape::wgsl::interval::emit_tape_interval`] writes it): lane i
+/// reads box i (its low corner, then its high corner) and writes its
+/// bounds' low and high ends.
+pub fn interval_module(function: &WgslFunction, name: &str) -> String {
+    module(
+        &function.code,
+        2,
+        &format!(
+            "    let lo = vec3<f32>(points[6u * i], points[6u * i + 1u], points[6u * i + 2u]);\n    \
+             let hi = vec3<f32>(points[6u * i + 3u], points[6u * i + 4u], points[6u * i + 5u]);\n    \
+             let r = {name}(lo, hi);\n    out[2u * i] = r.x;\n    out[2u * i + 1u] = r.y;\n"
+        ),
+    )
 }
 
 /// Words of the program buffer before the program: its length, result
@@ -55,8 +76,18 @@ const PROGRAM_HEADER: u32 = 4;
 pub fn program_module() -> String {
     module(
         &interpreter("iso_code", "iso_in"),
-        &format!("iso_run({PROGRAM_HEADER}u, iso_code[0], iso_code[1], p)"),
+        1,
+        &point_lane(&format!("iso_run({PROGRAM_HEADER}u, iso_code[0], iso_code[1], p)")),
     )
+}
+
+/// What the lanes of a point or interval shader read and write: lane i
+/// reads its `words` of `flat` (3 of a point, 6 of a box) and writes
+/// `outputs` words.
+struct Lanes<'a> {
+    flat: &'a [f32],
+    words: usize,
+    outputs: usize,
 }
 
 impl Gpu {
@@ -66,6 +97,15 @@ impl Gpu {
     /// it with `buffer = "iso_in"`, `base = 0`).
     pub fn point_shader(&self, function: &WgslFunction, name: &str) -> Result<PointShader, GpuError> {
         self.points_pipeline(&point_module(function, name), &format!("`{name}`"))
+    }
+
+    /// Compiles the compute pipeline bounding `function` over boxes
+    /// ([`Gpu::eval_boxes`]), an interval function named `name` reading
+    /// `iso_in` from index 0 (as
+    /// [`isoray_shape::wgsl::interval::emit_tape_interval`] writes it with
+    /// `buffer = "iso_in"`, `base = 0`).
+    pub fn interval_shader(&self, function: &WgslFunction, name: &str) -> Result<PointShader, GpuError> {
+        self.points_pipeline(&interval_module(function, name), &format!("`{name}`"))
     }
 
     /// Compiles the interpreter's point pipeline, which evaluates any
@@ -93,7 +133,43 @@ impl Gpu {
     /// The values of the shader's tape at `points`, with `inputs` in its
     /// input buffer (see [`WgslFunction::fill`]).
     pub fn eval_points(&self, shader: &PointShader, inputs: &[f32], points: &[[f32; 3]]) -> Result<Vec<f32>, GpuError> {
-        self.run_points(shader, inputs, &[0; PROGRAM_HEADER as usize], 0, points)
+        let flat: Vec<f32> = points.iter().flatten().copied().collect();
+        self.run_points(
+            shader,
+            inputs,
+            &[0; PROGRAM_HEADER as usize],
+            0,
+            Lanes {
+                flat: &flat,
+                words: 3,
+                outputs: 1,
+            },
+        )
+    }
+
+    /// The bounds (low and high ends) of the interval shader's tape over
+    /// `boxes` (each its low corner, then its high corner; see
+    /// [`isoray_shape::wgsl::interval::box_ends`] for f64 boxes), with
+    /// `inputs` in its input buffer.
+    pub fn eval_boxes(
+        &self,
+        shader: &PointShader,
+        inputs: &[f32],
+        boxes: &[[[f32; 3]; 2]],
+    ) -> Result<Vec<[f32; 2]>, GpuError> {
+        let flat: Vec<f32> = boxes.iter().flatten().flatten().copied().collect();
+        let ends = self.run_points(
+            shader,
+            inputs,
+            &[0; PROGRAM_HEADER as usize],
+            0,
+            Lanes {
+                flat: &flat,
+                words: 6,
+                outputs: 2,
+            },
+        )?;
+        Ok(ends.chunks_exact(2).map(|e| [e[0], e[1]]).collect())
     }
 
     /// The values of `program` at `points`, run by the interpreter's
@@ -108,18 +184,31 @@ impl Gpu {
     ) -> Result<Vec<f32>, GpuError> {
         let mut code = vec![program.len() as u32, program.output, program.slots as u32, 0];
         code.extend(&program.code);
-        self.run_points(shader, inputs, &code, program.slots, points)
+        let flat: Vec<f32> = points.iter().flatten().copied().collect();
+        self.run_points(
+            shader,
+            inputs,
+            &code,
+            program.slots,
+            Lanes {
+                flat: &flat,
+                words: 3,
+                outputs: 1,
+            },
+        )
     }
 
+    /// Runs the shader's lanes over `lanes`.
     fn run_points(
         &self,
         shader: &PointShader,
         inputs: &[f32],
         code: &[u32],
         registers: usize,
-        points: &[[f32; 3]],
+        Lanes { flat, words, outputs }: Lanes<'_>,
     ) -> Result<Vec<f32>, GpuError> {
-        if points.is_empty() {
+        let lanes = flat.len() / words;
+        if lanes == 0 {
             return Ok(Vec::new());
         }
         let bytes = |v: &[f32]| -> Vec<u8> { v.iter().flat_map(|x| x.to_le_bytes()).collect() };
@@ -127,7 +216,6 @@ impl Gpu {
         if input_values.is_empty() {
             input_values.push(0.0); // a storage buffer may not be empty
         }
-        let flat: Vec<f32> = points.iter().flatten().copied().collect();
         let storage = wgpu::BufferUsages::STORAGE;
         let in_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("iso_in"),
@@ -136,7 +224,7 @@ impl Gpu {
         });
         let pt_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("points"),
-            contents: &bytes(&flat),
+            contents: &bytes(flat),
             usage: storage,
         });
         let code_buf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -146,11 +234,11 @@ impl Gpu {
         });
         let regs_buf = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("iso_regs"),
-            size: (points.len() * registers).max(1) as u64 * 16,
+            size: (lanes * registers).max(1) as u64 * 16,
             usage: storage,
             mapped_at_creation: false,
         });
-        let size = (points.len() * 4) as u64;
+        let size = (lanes * outputs * 4) as u64;
         let out_buf = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("out"),
             size,
@@ -194,7 +282,7 @@ impl Gpu {
             let mut pass = enc.begin_compute_pass(&Default::default());
             pass.set_pipeline(&shader.pipeline);
             pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups((points.len() as u32).div_ceil(WORKGROUP), 1, 1);
+            pass.dispatch_workgroups((lanes as u32).div_ceil(WORKGROUP), 1, 1);
         }
         enc.copy_buffer_to_buffer(&out_buf, 0, &read_buf, 0, size);
         let submission = self.queue.submit([enc.finish()]);

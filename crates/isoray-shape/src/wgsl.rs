@@ -28,6 +28,8 @@
 
 use crate::ir::{BinOp, Instr, Tape, UnOp};
 
+pub mod interval;
+
 /// WGSL helpers the emitted code calls (once per shader module).
 pub const PRELUDE: &str = r#"// isoray: reference semantics of the shape IR in WGSL.
 fn iso_nan() -> f32 { return bitcast<f32>(0x7fc00000u); }
@@ -294,14 +296,9 @@ fn emit(tape: &Tape, name: &str, buffer: &str, base: u32, dual: bool) -> WgslFun
     for &(slot, v) in tape.constants() {
         code.push_str(&format!("    s{slot} = {};\n", constant(literal(v))));
     }
-    let mut uniform_slots = Vec::new();
-    let mut seen = std::collections::HashSet::new();
-    for &(_, slot) in tape.prologue().outputs() {
-        if seen.insert(slot) {
-            let e = format!("{buffer}[{}]", base + uniform_slots.len() as u32);
-            code.push_str(&format!("    s{slot} = {};\n", constant(e)));
-            uniform_slots.push(slot);
-        }
+    let (reads, uniform_slots) = buffer_reads(tape, buffer, base);
+    for (slot, e) in reads {
+        code.push_str(&format!("    s{slot} = {};\n", constant(e)));
     }
     // Lazy regions: `Skip { c, len }` skips the next `len` instructions when c > 0.
     let instrs = tape.instrs();
@@ -362,6 +359,22 @@ fn emit(tape: &Tape, name: &str, buffer: &str, base: u32, dual: bool) -> WgslFun
     }
     code.push_str(&format!("    return s{};\n}}\n", tape.output()));
     WgslFunction { code, uniform_slots }
+}
+
+/// The tape slots whose prologue values the function reads from the input
+/// buffer, each with its WGSL expression `BUFFER[base + k]`, and the
+/// [`WgslFunction::uniform_slots`] they make (one element per slot).
+fn buffer_reads(tape: &Tape, buffer: &str, base: u32) -> (Vec<(u32, String)>, Vec<u32>) {
+    let mut reads = Vec::new();
+    let mut uniform_slots = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    for &(_, slot) in tape.prologue().outputs() {
+        if seen.insert(slot) {
+            reads.push((slot, format!("{buffer}[{}]", base + uniform_slots.len() as u32)));
+            uniform_slots.push(slot);
+        }
+    }
+    (reads, uniform_slots)
 }
 
 /// The largest slot count a tape may have to run on [`interpreter`]
@@ -445,13 +458,9 @@ pub fn encode_tape(tape: &Tape, base: u32) -> Option<Program> {
     for &(slot, v) in tape.constants() {
         put(OP_CONST, slot, [(v as f32).to_bits(), 0, 0]);
     }
-    let mut uniform_slots = Vec::new();
-    let mut seen = std::collections::HashSet::new();
-    for &(_, slot) in tape.prologue().outputs() {
-        if seen.insert(slot) {
-            put(OP_INPUT, slot, [base + uniform_slots.len() as u32, 0, 0]);
-            uniform_slots.push(slot);
-        }
+    let (_, uniform_slots) = buffer_reads(tape, "", base);
+    for (k, &slot) in uniform_slots.iter().enumerate() {
+        put(OP_INPUT, slot, [base + k as u32, 0, 0]);
     }
     for ins in tape.instrs() {
         match *ins {

@@ -166,11 +166,9 @@ fn real_shapes_have_valid_wgsl_and_their_inputs_in_the_buffer() {
     validate(&module(&fns, base as usize));
 }
 
-/// The dual (gradient) form of every operation, of lazy regions and of a
-/// real shape is valid WGSL, and reads the buffer as the value form does.
-#[test]
-fn every_operation_has_a_valid_gradient() {
-    let mut fns = Vec::new();
+/// A tape of each unary operation of x, of each binary operation of x and
+/// an input, and of a lazy region.
+fn op_tapes() -> Vec<Tape> {
     let mut tapes = Vec::new();
     for &op in UNARY {
         let mut b = Builder::new();
@@ -190,6 +188,15 @@ fn every_operation_has_a_valid_gradient() {
     let e = b.mul(x, y);
     let out = b.lazy_select(far, x, e);
     tapes.push(b.tape(out));
+    tapes
+}
+
+/// The dual (gradient) form of every operation, of lazy regions and of a
+/// real shape is valid WGSL, and reads the buffer as the value form does.
+#[test]
+fn every_operation_has_a_valid_gradient() {
+    let mut fns = Vec::new();
+    let mut tapes = op_tapes();
     let lib = Library::new();
     let mut b = Builder::new();
     let node = lib
@@ -218,6 +225,42 @@ fn every_operation_has_a_valid_gradient() {
     }
     m.push_str(&format!(
         "@compute @workgroup_size(1)\nfn main() {{\n    let p = vec3<f32>(0.5, 0.25, -0.25);\n{body}}}\n"
+    ));
+    validate(&m);
+}
+
+/// The interval form of every operation, of lazy regions and of real
+/// shapes is valid WGSL (after both preludes), and reads the buffer as the
+/// value form does.
+#[test]
+fn every_operation_has_a_valid_interval_extension() {
+    let mut tapes = op_tapes();
+    let mut lib = Library::new();
+    lib.set_param("k", isoray_shape::Value::Float(0.25));
+    for text in [
+        "smooth_union(sphere(p, 1.0), box(rotate_y(p, 0.3), vec3(0.5)), k)",
+        "torus(repeat(p, vec3(3.0, 3.0, 3.0 + k)), 1.0, 0.25)",
+        "cylinder(twist_y(p, k), 1.0, 0.5) * 0.5 + smin_exp(ellipsoid(p, vec3(1.0, 0.5, 0.5)), hex_prism(p, 0.5, 0.3), 8.0)",
+    ] {
+        let mut b = Builder::new();
+        let node = lib.compile(&mut b, text, 0).unwrap_or_else(|d| panic!("{text}: {}", d.message));
+        tapes.push(b.tape(node));
+    }
+    let mut m = format!("{PRELUDE}{}", wgsl::interval::INTERVAL_PRELUDE);
+    m.push_str(
+        "@group(0) @binding(0) var<storage, read> iso_in: array<f32, 4>;\n\
+         @group(0) @binding(1) var<storage, read_write> out: array<vec2<f32>>;\n",
+    );
+    let mut body = String::new();
+    for (k, tape) in tapes.iter().enumerate() {
+        let v = emit_tape(tape, &format!("v{k}"), "iso_in", 0);
+        let i = wgsl::interval::emit_tape_interval(tape, &format!("i{k}"), "iso_in", 0);
+        assert_eq!(v.uniform_slots, i.uniform_slots);
+        m.push_str(&i.code);
+        body.push_str(&format!("    out[{k}u] = i{k}(lo, hi);\n"));
+    }
+    m.push_str(&format!(
+        "@compute @workgroup_size(1)\nfn main() {{\n    let lo = vec3<f32>(0.5, 0.25, -0.25);\n    let hi = lo + 0.5;\n{body}}}\n"
     ));
     validate(&m);
 }
