@@ -18,7 +18,8 @@ use isoray_shade::MaterialSample;
 
 use crate::layout::{Light, Mat, Obj, Settings};
 use isoray_shape::wgsl::{
-    emit_tape, emit_tape_dual, encode_tape, interpreter, WgslFunction, MAX_INTERPRETED_SLOTS, PRELUDE,
+    emit_tape, emit_tape_dual, encode_tape, input_slots, interpreter, InputBuffer, WgslFunction, MAX_INTERPRETED_SLOTS,
+    PRELUDE,
 };
 
 /// Words per pixel of the output: colour, then depth, normal and albedo.
@@ -102,6 +103,30 @@ pub struct Features {
     /// it the objects' dual-number functions are not written at all (they
     /// are most of a module's size, and of its compile time).
     pub dual: bool,
+    /// The lights, materials and objects as uniform arrays of these many
+    /// elements (a power of two at least their count), or None where they
+    /// do not fit one (64 KiB) and are storage arrays.
+    pub tables: [Option<u32>; 3],
+}
+
+/// The largest uniform buffer the tracer binds (WebGPU's default limit,
+/// which isoray's device asks for).
+pub const UNIFORM_BYTES: usize = 65536;
+
+/// The tracer's tables read in its loops: lights, materials, objects
+/// (bindings 2, 3 and 4), each its WGSL struct and element size.
+const TABLES: [(&str, &str, usize); 3] = [
+    ("lights", "Light", std::mem::size_of::<Light>()),
+    ("mats", "Mat", std::mem::size_of::<Mat>()),
+    ("objs", "Obj", std::mem::size_of::<Obj>()),
+];
+
+/// The uniform array length for `count` elements of `size` bytes: a power
+/// of two at least `count` (so that a few more need no new pipeline), or
+/// None past [`UNIFORM_BYTES`].
+fn uniform_length(count: usize, size: usize) -> Option<u32> {
+    let n = count.max(4).next_power_of_two();
+    (n * size <= UNIFORM_BYTES).then_some(n as u32)
 }
 
 impl Features {
@@ -123,7 +148,29 @@ impl Features {
             optics: scene.materials.iter().any(|m| MaterialSample::from(m).is_optical()),
             clear,
             dual: clear || scene.render.normals == NormalMethod::Analytic,
+            tables: [scene.lights.len(), scene.materials.len(), scene.objects.len()]
+                .into_iter()
+                .zip(TABLES)
+                .map(|(count, (_, _, size))| uniform_length(count, size))
+                .collect::<Vec<_>>()
+                .try_into()
+                .expect("three tables"),
         }
+    }
+
+    /// The declarations of the lights, materials and objects (bindings 2
+    /// to 4): uniform arrays where they fit, which lavapipe reads with one
+    /// load where a storage read in divergent code is a loop over the lanes.
+    fn table_declarations(self) -> String {
+        let mut out = String::new();
+        for (k, ((name, ty, _), len)) in TABLES.iter().zip(self.tables).enumerate() {
+            let binding = 2 + k;
+            out.push_str(&match len {
+                Some(n) => format!("@group(0) @binding({binding}) var<uniform> {name}: array<{ty}, {n}>;\n"),
+                None => format!("@group(0) @binding({binding}) var<storage, read> {name}: array<{ty}>;\n"),
+            });
+        }
+        out
     }
 
     /// The constants of the tracer (`kernel/*.wgsl`).
@@ -159,6 +206,9 @@ pub struct SceneCode {
     objects: Vec<ObjectCode>,
     /// The interpreted kernel's programs, all objects.
     pub(crate) code: Vec<u32>,
+    /// The length of the inputs' uniform array (vec4s), or None where
+    /// they are a storage array.
+    input_vec4s: Option<u32>,
 }
 
 impl SceneCode {
@@ -168,7 +218,24 @@ impl SceneCode {
         let features = Features::of(scene);
         let mut source = String::from(PRELUDE);
         source.push_str(&features.wgsl());
-        source.push_str("@group(0) @binding(0) var<storage, read> iso_in: array<f32>;\n");
+        source.push_str(&features.table_declarations());
+        // The compiled kernel's inputs in a uniform buffer where they fit
+        // (the interpreter reads them at run-time indices, from storage).
+        let n_inputs: usize = scene.objects.iter().map(|o| input_slots(o.shape.tape()).len()).sum();
+        let input_vec4s =
+            (kernel == Kernel::Compiled && n_inputs * 4 <= UNIFORM_BYTES).then_some(n_inputs.div_ceil(4).max(1) as u32);
+        let inputs = match input_vec4s {
+            Some(n) => {
+                source.push_str(&format!(
+                    "@group(0) @binding(0) var<uniform> iso_in: array<vec4<f32>, {n}>;\n"
+                ));
+                InputBuffer::Vec4s("iso_in")
+            }
+            None => {
+                source.push_str("@group(0) @binding(0) var<storage, read> iso_in: array<f32>;\n");
+                InputBuffer::Floats("iso_in")
+            }
+        };
         let mut objects = Vec::new();
         let mut code = Vec::new();
         let mut base = 0u32;
@@ -178,11 +245,11 @@ impl SceneCode {
                 let mut dual_cases = String::new();
                 for (i, o) in scene.objects.iter().enumerate() {
                     let tape = o.shape.tape();
-                    let f = emit_tape(tape, &format!("iso_o{i}"), "iso_in", base);
+                    let f = emit_tape(tape, &format!("iso_o{i}"), inputs, base);
                     source.push_str(&f.code);
                     value_cases.push_str(&format!("        case {i}u: {{ return iso_o{i}(p); }}\n"));
                     if features.dual {
-                        let g = emit_tape_dual(tape, &format!("iso_g{i}"), "iso_in", base);
+                        let g = emit_tape_dual(tape, &format!("iso_g{i}"), inputs, base);
                         source.push_str(&g.code);
                         dual_cases.push_str(&format!("        case {i}u: {{ return iso_g{i}(p); }}\n"));
                     }
@@ -235,7 +302,21 @@ impl SceneCode {
             source,
             objects,
             code,
+            input_vec4s,
         })
+    }
+
+    /// The size in bytes of binding `b`'s uniform buffer (the inputs, the
+    /// lights, the materials, the objects, where they are uniform arrays;
+    /// the settings), or None for a storage buffer.
+    pub(crate) fn uniform_bytes(&self, b: usize) -> Option<u64> {
+        let table = |k: usize| self.features.tables[k].map(|n| n as u64 * TABLES[k].2 as u64);
+        match b {
+            0 => self.input_vec4s.map(|n| n as u64 * 16),
+            1 => Some(std::mem::size_of::<Settings>() as u64),
+            2..=4 => table(b - 2),
+            _ => None,
+        }
     }
 
     /// The input buffer at the scene's current inputs: each object's

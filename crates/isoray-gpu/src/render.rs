@@ -100,6 +100,11 @@ impl FoldCells {
     }
 }
 
+/// Which of the tracer's bindings a module declares as uniform buffers.
+fn uniform_bindings(source: &str) -> [bool; BINDINGS] {
+    std::array::from_fn(|b| source.contains(&format!("@binding({b}) var<uniform>")))
+}
+
 /// What a frame cost.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct GpuTiming {
@@ -228,7 +233,11 @@ impl GpuRenderer {
         }
         let start = Instant::now();
         let mut program = self.build(code)?;
-        self.warm_up(&[&program.pipeline, &program.resolve], &program.layout)?;
+        self.warm_up(
+            &[&program.pipeline, &program.resolve],
+            &program.layout,
+            &program.code.source,
+        )?;
         program.tapes = tapes_of(scene);
         self.program = Some(program);
         Ok(Some(start.elapsed()))
@@ -254,10 +263,17 @@ impl GpuRenderer {
         // iso_in, settings, lights, materials, objects, environment, out,
         // stats, programs, scratch, meshes, the meshes' raster ids, dent maps,
         // fold cells.
-        let bindings = [
+        let mut bindings = [
             read, uniform, read, read, read, read, write, write, read, write, read, read, read, read,
         ];
         debug_assert_eq!(bindings.len(), BINDINGS);
+        // The inputs and the tables are uniform arrays where the module
+        // declares them so (see pack::Features::tables).
+        for (ty, is_uniform) in bindings.iter_mut().zip(uniform_bindings(source)) {
+            if is_uniform {
+                *ty = uniform;
+            }
+        }
         let source = format!("const USE_CELLS: bool = {};\n{source}", self.cells);
         let (pipelines, layout) = self
             .gpu
@@ -274,22 +290,29 @@ impl GpuRenderer {
         let start = Instant::now();
         let ([pipeline, resolve], layout) = self.tracer_pipelines(source)?;
         let created = start.elapsed();
-        self.warm_up(&[&pipeline, &resolve], &layout)?;
+        self.warm_up(&[&pipeline, &resolve], &layout, source)?;
         Ok((created, start.elapsed()))
     }
 
     /// Runs a new pipeline once on an empty region, so that a driver
     /// that compiles at the first dispatch (lavapipe does) compiles now and
     /// the build time reported is the whole cost of a structural edit.
-    fn warm_up(&self, pipelines: &[&wgpu::ComputePipeline], layout: &wgpu::BindGroupLayout) -> Result<(), GpuError> {
+    fn warm_up(
+        &self,
+        pipelines: &[&wgpu::ComputePipeline],
+        layout: &wgpu::BindGroupLayout,
+        source: &str,
+    ) -> Result<(), GpuError> {
         let device = &self.gpu.device;
-        let buffers: Vec<wgpu::Buffer> = (0..BINDINGS)
-            .map(|i| {
+        let buffers: Vec<wgpu::Buffer> = uniform_bindings(source)
+            .into_iter()
+            .map(|is_uniform| {
                 device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("warm-up"),
                     // All zero: an empty region, so no lane does anything.
-                    size: 256.max(std::mem::size_of::<crate::layout::Settings>() as u64),
-                    usage: if i == 1 {
+                    // A uniform array's buffer holds at least its length.
+                    size: if is_uniform { pack::UNIFORM_BYTES as u64 } else { 256 },
+                    usage: if is_uniform {
                         wgpu::BufferUsages::UNIFORM
                     } else {
                         wgpu::BufferUsages::STORAGE
@@ -354,12 +377,27 @@ impl GpuRenderer {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
+        // Bindings 0 and 2 to 4: a uniform buffer the length of its array
+        // where the module declares one, else a storage buffer.
+        let table = |binding: usize, label: &str, bytes: &[u8]| match program.code.uniform_bytes(binding) {
+            Some(size) => {
+                let mut padded = bytes.to_vec();
+                padded.resize(size as usize, 0);
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: &padded,
+                    usage: wgpu::BufferUsages::UNIFORM,
+                })
+            }
+            None => storage(label, bytes),
+        };
         let inputs = Words(program.code.inputs(scene).iter().map(|x| x.to_bits()).collect());
-        let in_buf = storage("iso_in", &inputs.bytes());
-        let lights = storage("lights", &layout::bytes_of_all(&pack::lights(scene)));
-        let mats = storage("materials", &layout::bytes_of_all(&pack::materials(scene)));
+        let in_buf = table(0, "iso_in", &inputs.bytes());
+        let lights = table(2, "lights", &layout::bytes_of_all(&pack::lights(scene)));
+        let mats = table(3, "materials", &layout::bytes_of_all(&pack::materials(scene)));
         let (dent_words, dent_offsets) = pack::dents(scene, &mut self.dent_cache);
-        let objs = storage(
+        let objs = table(
+            4,
             "objects",
             &layout::bytes_of_all(&program.code.objects(scene, &dent_offsets)),
         );

@@ -161,6 +161,36 @@ pub fn literal(v: f64) -> String {
     }
 }
 
+/// Where an emitted function reads its input-derived values: element k
+/// of its part of the buffer is `BUFFER[base + k]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputBuffer<'a> {
+    /// An `array<f32>` of that name (a storage buffer): `NAME[i]`.
+    Floats(&'a str),
+    /// An `array<vec4<f32>, N>` of that name, four values an element (a
+    /// uniform buffer, whose arrays' elements are 16 bytes apart):
+    /// `NAME[i / 4][i % 4]`. On lavapipe a storage-buffer read inside
+    /// divergent control flow is a loop over the lanes, a uniform one a
+    /// single load: the tracer's marching loops read their inputs this way.
+    Vec4s(&'a str),
+}
+
+impl InputBuffer<'_> {
+    /// The WGSL expression of element `i` of the buffer.
+    pub fn read(&self, i: u32) -> String {
+        match self {
+            InputBuffer::Floats(name) => format!("{name}[{i}]"),
+            InputBuffer::Vec4s(name) => format!("{name}[{}u][{}u]", i / 4, i % 4),
+        }
+    }
+}
+
+impl<'a> From<&'a str> for InputBuffer<'a> {
+    fn from(name: &'a str) -> Self {
+        InputBuffer::Floats(name)
+    }
+}
+
 /// A tape written as a WGSL function.
 #[derive(Debug, Clone, PartialEq)]
 pub struct WgslFunction {
@@ -194,10 +224,11 @@ impl WgslFunction {
 
 /// Writes `tape` as `fn NAME(p: vec3<f32>) -> f32`, reading its
 /// input-derived values from `BUFFER[base + k]` (a module-scope
-/// `array<f32>` the caller declares). Each slot is a `var`; a lazy region
+/// `array<f32>` the caller declares; or, given an [`InputBuffer::Vec4s`],
+/// a uniform `array<vec4<f32>, N>`). Each slot is a `var`; a lazy region
 /// is an `if` that skips it where the tape would skip it.
-pub fn emit_tape(tape: &Tape, name: &str, buffer: &str, base: u32) -> WgslFunction {
-    emit(tape, name, buffer, base, false)
+pub fn emit_tape<'a>(tape: &Tape, name: &str, buffer: impl Into<InputBuffer<'a>>, base: u32) -> WgslFunction {
+    emit(tape, name, buffer.into(), base, false)
 }
 
 /// Writes `tape`'s value and gradient by forward-mode automatic
@@ -216,8 +247,8 @@ pub fn emit_tape(tape: &Tape, name: &str, buffer: &str, base: u32) -> WgslFuncti
 /// let g = wgsl::emit_tape_dual(&b.tape(d), "grad", "iso_in", 0);
 /// assert!(g.code.contains("fn grad(p: vec3<f32>) -> vec4<f32>"));
 /// ```
-pub fn emit_tape_dual(tape: &Tape, name: &str, buffer: &str, base: u32) -> WgslFunction {
-    emit(tape, name, buffer, base, true)
+pub fn emit_tape_dual<'a>(tape: &Tape, name: &str, buffer: impl Into<InputBuffer<'a>>, base: u32) -> WgslFunction {
+    emit(tape, name, buffer.into(), base, true)
 }
 
 /// The derivative factor k of a unary operation (d(op a) = k·da) as WGSL,
@@ -265,7 +296,7 @@ fn binary_gradient(op: BinOp, a: &str, b: &str, v: &str) -> String {
     }
 }
 
-fn emit(tape: &Tape, name: &str, buffer: &str, base: u32, dual: bool) -> WgslFunction {
+fn emit(tape: &Tape, name: &str, buffer: InputBuffer<'_>, base: u32, dual: bool) -> WgslFunction {
     let (ty, ret) = if dual {
         ("vec4<f32>", "vec4<f32>")
     } else {
@@ -364,17 +395,23 @@ fn emit(tape: &Tape, name: &str, buffer: &str, base: u32, dual: bool) -> WgslFun
 /// The tape slots whose prologue values the function reads from the input
 /// buffer, each with its WGSL expression `BUFFER[base + k]`, and the
 /// [`WgslFunction::uniform_slots`] they make (one element per slot).
-fn buffer_reads(tape: &Tape, buffer: &str, base: u32) -> (Vec<(u32, String)>, Vec<u32>) {
-    let mut reads = Vec::new();
-    let mut uniform_slots = Vec::new();
-    let mut seen = std::collections::HashSet::new();
-    for &(_, slot) in tape.prologue().outputs() {
-        if seen.insert(slot) {
-            reads.push((slot, format!("{buffer}[{}]", base + uniform_slots.len() as u32)));
-            uniform_slots.push(slot);
-        }
-    }
+fn buffer_reads(tape: &Tape, buffer: InputBuffer<'_>, base: u32) -> (Vec<(u32, String)>, Vec<u32>) {
+    let uniform_slots = input_slots(tape);
+    let reads = (uniform_slots.iter().enumerate())
+        .map(|(k, &slot)| (slot, buffer.read(base + k as u32)))
+        .collect();
     (reads, uniform_slots)
+}
+
+/// The tape slots an emitted function reads from the input buffer, in
+/// buffer order (its [`WgslFunction::uniform_slots`]): how many elements
+/// of the buffer it takes.
+pub fn input_slots(tape: &Tape) -> Vec<u32> {
+    let mut seen = std::collections::HashSet::new();
+    (tape.prologue().outputs().iter())
+        .map(|&(_, slot)| slot)
+        .filter(|&slot| seen.insert(slot))
+        .collect()
 }
 
 /// The largest slot count a tape may have to run on [`interpreter`]
@@ -458,7 +495,7 @@ pub fn encode_tape(tape: &Tape, base: u32) -> Option<Program> {
     for &(slot, v) in tape.constants() {
         put(OP_CONST, slot, [(v as f32).to_bits(), 0, 0]);
     }
-    let (_, uniform_slots) = buffer_reads(tape, "", base);
+    let (_, uniform_slots) = buffer_reads(tape, InputBuffer::Floats(""), base);
     for (k, &slot) in uniform_slots.iter().enumerate() {
         put(OP_INPUT, slot, [base + k as u32, 0, 0]);
     }

@@ -164,6 +164,37 @@ fn real_shapes_have_valid_wgsl_and_their_inputs_in_the_buffer() {
     }
     assert!(base > 0, "the shapes read parameters and the time");
     validate(&module(&fns, base as usize));
+    // The same functions reading a uniform array of vec4s: element k at
+    // [k / 4][k % 4], the same slots.
+    let mut m = String::from(PRELUDE);
+    m.push_str(&format!(
+        "@group(0) @binding(0) var<uniform> iso_in: array<vec4<f32>, {}>;\n\
+         @group(0) @binding(1) var<storage, read_write> out: array<f32>;\n",
+        (base as usize).div_ceil(4)
+    ));
+    let mut body = String::new();
+    let mut base = 0u32;
+    for (k, text) in texts.iter().enumerate() {
+        let mut b = Builder::new();
+        let node = lib.compile(&mut b, text, 0).unwrap();
+        let tape: Tape = b.tape(node);
+        let plain = emit_tape(&tape, &format!("f{k}"), "iso_in", base);
+        let f = emit_tape(&tape, &format!("f{k}"), wgsl::InputBuffer::Vec4s("iso_in"), base);
+        assert_eq!(f.uniform_slots, plain.uniform_slots);
+        let last = base + f.uniform_slots.len() as u32 - 1;
+        assert!(
+            f.code.contains(&format!("iso_in[{}u][{}u]", last / 4, last % 4)),
+            "{}",
+            f.code
+        );
+        base += f.uniform_slots.len() as u32;
+        m.push_str(&f.code);
+        body.push_str(&format!("    out[{k}u] = f{k}(p);\n"));
+    }
+    m.push_str(&format!(
+        "@compute @workgroup_size(1)\nfn main() {{\n    let p = vec3<f32>(0.5, 0.25, -0.25);\n{body}}}\n"
+    ));
+    validate(&m);
 }
 
 /// A tape of each unary operation of x, of each binary operation of x and

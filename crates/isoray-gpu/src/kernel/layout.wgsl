@@ -74,9 +74,8 @@ struct Obj {
 }
 
 @group(0) @binding(1) var<uniform> cfg: Settings;
-@group(0) @binding(2) var<storage, read> lights: array<Light>;
-@group(0) @binding(3) var<storage, read> mats: array<Mat>;
-@group(0) @binding(4) var<storage, read> objs: array<Obj>;
+// Bindings 0 (iso_in) and 2 to 4 (lights, mats, objs) are declared by
+// pack: uniform arrays where they fit (Features::tables), storage ones else.
 @group(0) @binding(5) var<storage, read> env: array<f32>;
 @group(0) @binding(6) var<storage, read_write> out: array<u32>;
 // Work counters of the whole render: (low, high) words of five 64-bit sums

@@ -28,7 +28,7 @@
 //! assert!(wgsl::interval::INTERVAL_PRELUDE.contains("fn iv_mul("));
 //! ```
 
-use super::{buffer_reads, literal, WgslFunction};
+use super::{buffer_reads, literal, InputBuffer, WgslFunction};
 use crate::ir::{BinOp, Instr, Tape, UnOp};
 
 /// WGSL interval rules (after [`PRELUDE`](crate::wgsl::PRELUDE), whose
@@ -239,7 +239,7 @@ fn constant(v: f64) -> String {
 /// by its f32 rounding. Lazy regions are evaluated (as the CPU's interval
 /// evaluator does: their select takes both branches where the condition
 /// may change sign). A NaN constant gives the whole line where it is read.
-pub fn emit_tape_interval(tape: &Tape, name: &str, buffer: &str, base: u32) -> WgslFunction {
+pub fn emit_tape_interval<'a>(tape: &Tape, name: &str, buffer: impl Into<InputBuffer<'a>>, base: u32) -> WgslFunction {
     let mut code = format!("fn {name}(lo: vec3<f32>, hi: vec3<f32>) -> vec2<f32> {{\n");
     for k in 0..tape.slots() {
         code.push_str(&format!("    var s{k}: vec2<f32>;\n"));
@@ -253,7 +253,7 @@ pub fn emit_tape_interval(tape: &Tape, name: &str, buffer: &str, base: u32) -> W
         };
         code.push_str(&format!("    s{slot} = {c};\n"));
     }
-    let (reads, uniform_slots) = buffer_reads(tape, buffer, base);
+    let (reads, uniform_slots) = buffer_reads(tape, buffer.into(), base);
     for (slot, e) in reads {
         code.push_str(&format!("    s{slot} = iv_widen({e}, {e});\n"));
     }
