@@ -7,12 +7,21 @@
 //! in some construct, with a condition read from a buffer so that the
 //! compiler cannot know it; the flag pattern says which lanes want the
 //! work. A second set reads 64 buffer values in a loop, from a storage
-//! buffer and from a uniform buffer, inside and outside divergent code.
+//! buffer, from a uniform buffer and from a texture, inside and outside
+//! divergent code.
 
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
 const LANES: u32 = 1 << 20;
+
+/// Where the table the reads come from lives.
+#[derive(Clone, Copy)]
+enum Table {
+    Storage,
+    Uniform,
+    Texture,
+}
 const WORKGROUP: u32 = 64;
 
 fn main() {
@@ -49,11 +58,31 @@ fn main() {
         contents: table_bytes,
         usage: wgpu::BufferUsages::UNIFORM,
     });
-    let run = |body: &str, every: u32, uniform: bool| -> f64 {
-        let decl = if uniform {
-            "@group(0) @binding(2) var<uniform> table: array<vec4<f32>, 256>;\nfn at(i: u32) -> f32 { return table[i / 4u][i % 4u]; }\n"
-        } else {
-            "@group(0) @binding(2) var<storage, read> table: array<f32>;\nfn at(i: u32) -> f32 { return table[i]; }\n"
+    let texture = device.create_texture_with_data(
+        &queue,
+        &wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d {
+                width: 32,
+                height: 32,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        table_bytes,
+    );
+    let texture_view = texture.create_view(&Default::default());
+    let run = |body: &str, every: u32, table: Table| -> f64 {
+        let decl = match table {
+            Table::Uniform => "@group(0) @binding(2) var<uniform> table: array<vec4<f32>, 256>;\nfn at(i: u32) -> f32 { return table[i / 4u][i % 4u]; }\n",
+            Table::Storage => "@group(0) @binding(2) var<storage, read> table: array<f32>;\nfn at(i: u32) -> f32 { return table[i]; }\n",
+            Table::Texture => "@group(0) @binding(2) var table: texture_2d<f32>;\nfn at(i: u32) -> f32 { return textureLoad(table, vec2<u32>(i % 32u, i / 32u), 0).x; }\n",
         };
         let src = format!(
             "@group(0) @binding(0) var<storage, read_write> out: array<f32>;\n\
@@ -79,7 +108,11 @@ fn main() {
             contents: bytemuck::cast_slice(&flags),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let t = if uniform { &uniform_table } else { &storage_table };
+        let resource = match table {
+            Table::Uniform => uniform_table.as_entire_binding(),
+            Table::Storage => storage_table.as_entire_binding(),
+            Table::Texture => wgpu::BindingResource::TextureView(&texture_view),
+        };
         let bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
             layout: &pipe.get_bind_group_layout(0),
@@ -92,10 +125,7 @@ fn main() {
                     binding: 1,
                     resource: fbuf.as_entire_binding(),
                 },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: t.as_entire_binding(),
-                },
+                wgpu::BindGroupEntry { binding: 2, resource },
             ],
         });
         // The best of three dispatches (the first also compiles).
@@ -129,22 +159,23 @@ fn main() {
     for (name, body) in &shapes {
         let t: Vec<String> = [0, 64, 8, 1]
             .iter()
-            .map(|&e| format!("{:.0} ms", run(body, e, false)))
+            .map(|&e| format!("{:.0} ms", run(body, e, Table::Storage)))
             .collect();
         println!("| `{name}` | {} |", t.join(" | "));
     }
     let reads = "    for (var k = 0u; k < 64u; k++) { x += at((id.x + k * 7u) % 16u); }\n";
     let divergent = format!("    if (c) {{\n{reads}    }}\n");
-    println!("\n| 64 table reads a lane | storage buffer | uniform buffer |");
-    println!("|---|---|---|");
+    println!("\n| 64 table reads a lane | storage buffer | uniform buffer | texture (textureLoad) |");
+    println!("|---|---|---|---|");
     for (name, body, every) in [
         ("in uniform control flow", reads.to_string(), 0),
         ("inside an `if` every lane takes", divergent, 1),
     ] {
         println!(
-            "| {name} | {:.1} ms | {:.1} ms |",
-            run(&body, every, false),
-            run(&body, every, true)
+            "| {name} | {:.1} ms | {:.1} ms | {:.1} ms |",
+            run(&body, every, Table::Storage),
+            run(&body, every, Table::Uniform),
+            run(&body, every, Table::Texture)
         );
     }
 }
