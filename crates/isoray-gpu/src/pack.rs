@@ -963,3 +963,42 @@ pub(crate) fn dents(scene: &Scene, cache: &mut DentCache) -> (Words, Vec<u32>) {
     *cache = kept;
     (out, offsets)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniform_tables_round_up_and_stop_at_64_kib() {
+        let obj = std::mem::size_of::<Obj>();
+        assert_eq!(obj, 48);
+        assert_eq!(uniform_length(0, obj), Some(4));
+        assert_eq!(uniform_length(5, obj), Some(8));
+        assert_eq!(uniform_length(1000, obj), Some(1024)); // 48 KiB
+        assert_eq!(uniform_length(1025, obj), None); // 2048 × 48 B > 64 KiB
+        let mat = std::mem::size_of::<Mat>();
+        assert_eq!(uniform_length(512, mat), Some(512)); // 56 KiB
+        assert_eq!(uniform_length(600, mat), None);
+    }
+
+    /// A fifth light outgrows a table of four, so the pipeline is rebuilt
+    /// (`Features` is part of its cache key); a third does not.
+    #[test]
+    fn a_light_past_the_tables_capacity_changes_the_features() {
+        let light = "[[light]]\nkind = \"point\"\nposition = [1.0, 4.0, 2.0]\n";
+        let scene = |lights: usize| {
+            let text = format!("[[object]]\nshape = \"sphere(p, 1.0)\"\n{}", light.repeat(lights));
+            isoray_scene::load_str(&text, "lights.toml", &[]).unwrap_or_else(|e| panic!("{}", e.rendered))
+        };
+        let f = |n| Features::of(&scene(n));
+        assert_eq!(f(2).tables[0], Some(4));
+        assert_eq!(f(2), f(3));
+        assert_eq!(f(5).tables[0], Some(8));
+        assert_ne!(f(4), f(5));
+        // The module declares what the features say.
+        let code = SceneCode::new(&scene(5), Kernel::Compiled).unwrap();
+        assert!(code.source.contains("var<uniform> lights: array<Light, 8>;"));
+        assert_eq!(code.uniform_bytes(2), Some(8 * 80));
+        assert!(code.source.contains("var<uniform> iso_in: array<vec4<f32>,"));
+    }
+}

@@ -271,3 +271,26 @@ fn every_view_and_shadow_mode_renders_as_on_the_cpu() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// Tables too large for a uniform buffer stay storage buffers and draw the
+/// same: csg's scene with 600 more materials (600 × 112 bytes > 64 KiB).
+#[test]
+fn materials_past_a_uniform_buffer_render_as_on_the_cpu() {
+    let mut gpu = GpuRenderer::new().unwrap_or_else(|e| panic!("{e}"));
+    let path = root().join("examples/csg.toml");
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    for k in 0..600 {
+        text.push_str(&format!(
+            "\n[material.extra{k}]\ndiffuse = [{}, 0.5, 0.5]\n",
+            k as f64 / 600.0
+        ));
+    }
+    let over = ["render.width=160", "render.height=90"].map(String::from).to_vec();
+    let scene = isoray_scene::load_str(&text, "csg-600.toml", &over).unwrap_or_else(|e| panic!("{}", e.rendered));
+    let features = isoray_gpu::Features::of(&scene);
+    assert_eq!(features.tables[1], None, "600 materials are a storage array");
+    assert!(features.tables[0].is_some() && features.tables[2].is_some());
+    let p = parity_of(&scene, &path, &mut gpu, None);
+    eprintln!("{p:?}");
+    assert!(p.over <= 0.01 && p.mean < 1.0 && p.depth <= 1e-3, "{p:?}");
+}
