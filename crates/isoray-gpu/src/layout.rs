@@ -197,8 +197,9 @@ gpu_struct! {
         reach_scene: u32,
         /// The same for the objects marched beside closed forms.
         reach_rest: u32,
-        /// Padding.
-        pad4: u32,
+        /// The same for the field shadow rays march where its distance
+        /// is below the penumbra's (isoray-render's `Reaches::penumbra`).
+        reach_penumbra: u32,
         /// Padding.
         pad5: u32,
         /// The reaches' domain: least corner (w unused).
@@ -213,6 +214,10 @@ gpu_struct! {
         reach_rest_lo: [f32; 4],
         /// The rest's surface box: greatest corner.
         reach_rest_hi: [f32; 4],
+        /// The penumbra's box: least corner.
+        reach_penumbra_lo: [f32; 4],
+        /// The penumbra's box: greatest corner.
+        reach_penumbra_hi: [f32; 4],
     }
 }
 

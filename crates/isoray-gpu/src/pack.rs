@@ -645,8 +645,8 @@ pub(crate) fn settings(
     }
 }
 
-/// The settings' reach fields: the scene's and the rest's surface boxes
-/// in their domain, as `reach_far` in `kernel/tracer.wgsl` reads them.
+/// The settings' reach fields: the scene's, the rest's and the penumbra's
+/// boxes in their domain, as `reach_far` in `kernel/tracer.wgsl` reads them.
 fn reach_settings(reaches: &isoray_render::Reaches) -> Settings {
     let corner = |p: [f64; 3]| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0];
     let mut s = Settings::default();
@@ -665,6 +665,7 @@ fn reach_settings(reaches: &isoray_render::Reaches) -> Settings {
     };
     (s.reach_scene, s.reach_scene_lo, s.reach_scene_hi) = one(&reaches.scene);
     (s.reach_rest, s.reach_rest_lo, s.reach_rest_hi) = one(&reaches.rest);
+    (s.reach_penumbra, s.reach_penumbra_lo, s.reach_penumbra_hi) = one(&reaches.penumbra);
     s
 }
 
@@ -979,6 +980,30 @@ mod tests {
         let mat = std::mem::size_of::<Mat>();
         assert_eq!(uniform_length(512, mat), Some(512)); // 56 KiB
         assert_eq!(uniform_length(600, mat), None);
+    }
+
+    /// Soft shadow rays stop past the penumbra's box, the CPU's own: the
+    /// lighting example's box holds its objects. (It is large: the floor
+    /// plane's distance is below the penumbra's, light size × shadow
+    /// distance, far up.)
+    #[test]
+    fn the_penumbras_reach_reaches_the_settings() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/lighting.toml");
+        let scene = isoray_scene::load(&path, &[]).unwrap_or_else(|e| panic!("{}", e.rendered));
+        let reaches = isoray_render::reaches(&scene, scene.camera.position, Some(640 * 360));
+        let (_, Some(b)) = reaches.penumbra.as_ref().expect("a penumbra reach").boxes() else {
+            panic!("the penumbra has a box")
+        };
+        let s = reach_settings(&reaches);
+        assert_eq!(s.reach_penumbra, 2);
+        let (lo, hi) = (s.reach_penumbra_lo, s.reach_penumbra_hi);
+        assert_eq!([lo[0], lo[1], lo[2]], b.lo.map(|v| v as f32));
+        assert_eq!([hi[0], hi[1], hi[2]], b.hi.map(|v| v as f32));
+        // The sphere at (-1.8, 0.7, 0) of radius 0.7 is inside.
+        assert!(
+            lo[0] <= -2.5 && hi[0] >= -1.1 && lo[1] <= 0.0 && hi[1] >= 1.4,
+            "{lo:?} {hi:?}"
+        );
     }
 
     /// A fifth light outgrows a table of four, so the pipeline is rebuilt

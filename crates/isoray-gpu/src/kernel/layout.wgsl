@@ -42,11 +42,13 @@ struct Settings {
     fixed_march: u32, fixed_step: f32, aa_pattern: u32, shadow_eps: f32,
     raster: u32, raster_stride: u32, parallax: u32, parallax_steps: u32,
     // The surfaces' reach (isoray-render's Reach): 0 unknown, 1 no surface
-    // in the domain, 2 the surface's box.
-    reach_scene: u32, reach_rest: u32, pad4: u32, pad5: u32,
+    // in the domain, 2 the surface's box; of the scene's field, of the
+    // objects beside closed forms, and of the penumbra (shadow rays).
+    reach_scene: u32, reach_rest: u32, reach_penumbra: u32, pad5: u32,
     reach_domain_lo: vec4<f32>, reach_domain_hi: vec4<f32>,
     reach_scene_lo: vec4<f32>, reach_scene_hi: vec4<f32>,
     reach_rest_lo: vec4<f32>, reach_rest_hi: vec4<f32>,
+    reach_penumbra_lo: vec4<f32>, reach_penumbra_hi: vec4<f32>,
 }
 
 struct Light {

@@ -251,7 +251,12 @@ fn shade(p: vec3<f32>, n: vec3<f32>, dir: vec3<f32>, s: Mat, local: vec3<f32>, m
             }
             let o = p + n * (2.0 * cfg.hit_eps);
             let tmax = min(inc.dist, cfg.shadow_max_dist);
-            var vis = shadow_march(occluders, o, l, tmax, mode, light.size);
+            // Past the box where occluders are nearer than the penumbra's
+            // distance nothing changes the ray's visibility (the CPU's
+            // penumbra reach): the march stops there; meshes and
+            // transparent objects beyond it still count, below.
+            let reach_t = min(tmax, reach_far(R_PENUMBRA, o, l, tmax));
+            var vis = shadow_march(occluders, o, l, reach_t, mode, light.size);
             // Meshes block what reaches them (hard shadows).
             if (HAS_MESHES && mode != SH_NONE) {
                 if (vis > 0.0) {

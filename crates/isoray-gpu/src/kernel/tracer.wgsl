@@ -22,17 +22,27 @@ fn inside_box(lo: vec3<f32>, hi: vec3<f32>, p: vec3<f32>) -> bool {
     return all(p >= lo) && all(p <= hi);
 }
 
+// Which reach reach_far reads.
+const R_SCENE: u32 = 0u;
+const R_REST: u32 = 1u;
+const R_PENUMBRA: u32 = 2u;
+
 // isoray-render's Reach::far: the parameter beyond which the ray meets no
-// surface of the field (`rest` or the scene's), 0 <= t <= tmax: negative
-// when it meets none at all, +inf when that is not known.
-fn reach_far(rest: bool, o: vec3<f32>, d: vec3<f32>, tmax: f32) -> f32 {
+// surface of the field (`which`: the scene's, the rest's, or where the
+// shadow rays' field is below the penumbra's distance), 0 <= t <= tmax:
+// negative when it meets none at all, +inf when that is not known.
+fn reach_far(which: u32, o: vec3<f32>, d: vec3<f32>, tmax: f32) -> f32 {
     var kind = cfg.reach_scene;
     var lo = cfg.reach_scene_lo.xyz;
     var hi = cfg.reach_scene_hi.xyz;
-    if (rest) {
+    if (which == R_REST) {
         kind = cfg.reach_rest;
         lo = cfg.reach_rest_lo.xyz;
         hi = cfg.reach_rest_hi.xyz;
+    } else if (which == R_PENUMBRA) {
+        kind = cfg.reach_penumbra;
+        lo = cfg.reach_penumbra_lo.xyz;
+        hi = cfg.reach_penumbra_hi.xyz;
     }
     let dlo = cfg.reach_domain_lo.xyz;
     let dhi = cfg.reach_domain_hi.xyz;
@@ -114,7 +124,7 @@ fn trace(o: vec3<f32>, d: vec3<f32>, inside: bool) -> Traced {
     }
     primary_texel.x = NO_TEXEL;
     var far = iso_inf();
-    if (!inside) { far = reach_far(kind == F_REST, o, d, cfg.max_dist); }
+    if (!inside) { far = reach_far(select(R_SCENE, R_REST, kind == F_REST), o, d, cfg.max_dist); }
     let h = sphere_trace(kind, o, d, cap, far);
     var r = Traced(h.t, h.steps, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, NO_MESH);
     if (!(abs(h.t) < iso_inf())) { return r; }
