@@ -167,15 +167,8 @@ fn run(scene: &Scene, records: &[Record]) -> Option<Vec<[u32; OUT]>> {
         })
     };
     let settings = buffer("settings", bytemuck::bytes_of(&settings), wgpu::BufferUsages::UNIFORM);
-    let mut objects = crate::layout::bytes_of_all(&code.objects(scene, &dent_offsets));
-    // A uniform array where the module declares one (pack::Features::tables).
-    let objects = match code.uniform_bytes(4) {
-        Some(size) => {
-            objects.resize(size as usize, 0);
-            buffer("objects", &objects, wgpu::BufferUsages::UNIFORM)
-        }
-        None => buffer("objects", &objects, wgpu::BufferUsages::STORAGE),
-    };
+    let objects = crate::layout::bytes_of_all(&code.objects(scene, &dent_offsets));
+    let objects = code.table_buffer(device, 4, "objects", &objects);
     let dents = buffer("dents", &dent_words.bytes(), wgpu::BufferUsages::STORAGE);
     let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("probe"),

@@ -148,13 +148,10 @@ impl Features {
             optics: scene.materials.iter().any(|m| MaterialSample::from(m).is_optical()),
             clear,
             dual: clear || scene.render.normals == NormalMethod::Analytic,
-            tables: [scene.lights.len(), scene.materials.len(), scene.objects.len()]
-                .into_iter()
-                .zip(TABLES)
-                .map(|(count, (_, _, size))| uniform_length(count, size))
-                .collect::<Vec<_>>()
-                .try_into()
-                .expect("three tables"),
+            tables: {
+                let counts = [scene.lights.len(), scene.materials.len(), scene.objects.len()];
+                std::array::from_fn(|k| uniform_length(counts[k], TABLES[k].2))
+            },
         }
     }
 
@@ -306,17 +303,37 @@ impl SceneCode {
         })
     }
 
-    /// The size in bytes of binding `b`'s uniform buffer (the inputs, the
-    /// lights, the materials, the objects, where they are uniform arrays;
-    /// the settings), or None for a storage buffer.
+    /// The size in bytes of binding `b`'s uniform buffer where it is a
+    /// uniform array (the inputs, the lights, the materials, the objects:
+    /// bindings 0 and 2 to 4), or None.
     pub(crate) fn uniform_bytes(&self, b: usize) -> Option<u64> {
-        let table = |k: usize| self.features.tables[k].map(|n| n as u64 * TABLES[k].2 as u64);
         match b {
             0 => self.input_vec4s.map(|n| n as u64 * 16),
-            1 => Some(std::mem::size_of::<Settings>() as u64),
-            2..=4 => table(b - 2),
+            2..=4 => self.features.tables[b - 2].map(|n| n as u64 * TABLES[b - 2].2 as u64),
             _ => None,
         }
+    }
+
+    /// The buffer of binding `b` holding `bytes`: a uniform buffer padded
+    /// to its array's length where the module declares one
+    /// ([`SceneCode::uniform_bytes`]), else a storage buffer.
+    pub(crate) fn table_buffer(&self, device: &wgpu::Device, b: usize, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+        let (contents, usage) = match self.uniform_bytes(b) {
+            Some(size) => {
+                let mut padded = bytes.to_vec();
+                padded.resize(size as usize, 0);
+                (std::borrow::Cow::Owned(padded), wgpu::BufferUsages::UNIFORM)
+            }
+            None => (std::borrow::Cow::Borrowed(bytes), wgpu::BufferUsages::STORAGE),
+        };
+        wgpu::util::DeviceExt::create_buffer_init(
+            device,
+            &wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &contents,
+                usage,
+            },
+        )
     }
 
     /// The input buffer at the scene's current inputs: each object's

@@ -377,20 +377,9 @@ impl GpuRenderer {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
-        // Bindings 0 and 2 to 4: a uniform buffer the length of its array
-        // where the module declares one, else a storage buffer.
-        let table = |binding: usize, label: &str, bytes: &[u8]| match program.code.uniform_bytes(binding) {
-            Some(size) => {
-                let mut padded = bytes.to_vec();
-                padded.resize(size as usize, 0);
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents: &padded,
-                    usage: wgpu::BufferUsages::UNIFORM,
-                })
-            }
-            None => storage(label, bytes),
-        };
+        // Bindings 0 and 2 to 4: uniform arrays where the module declares them.
+        let table =
+            |binding: usize, label: &str, bytes: &[u8]| program.code.table_buffer(device, binding, label, bytes);
         let inputs = Words(program.code.inputs(scene).iter().map(|x| x.to_bits()).collect());
         let in_buf = table(0, "iso_in", &inputs.bytes());
         let lights = table(2, "lights", &layout::bytes_of_all(&pack::lights(scene)));

@@ -495,7 +495,7 @@ pub fn encode_tape(tape: &Tape, base: u32) -> Option<Program> {
     for &(slot, v) in tape.constants() {
         put(OP_CONST, slot, [(v as f32).to_bits(), 0, 0]);
     }
-    let (_, uniform_slots) = buffer_reads(tape, InputBuffer::Floats(""), base);
+    let uniform_slots = input_slots(tape);
     for (k, &slot) in uniform_slots.iter().enumerate() {
         put(OP_INPUT, slot, [base + k as u32, 0, 0]);
     }

@@ -218,12 +218,15 @@ pub fn binary_rule(op: BinOp) -> &'static str {
 
 /// A number as a WGSL interval expression containing it: the point of its
 /// f32 where that is the number (a normal or zero f32), else that f32
-/// widened.
+/// widened; the whole line for NaN.
 fn constant(v: f64) -> String {
+    if v.is_nan() {
+        return "iv_whole()".to_string();
+    }
     let f = v as f32;
     let exact = f as f64 == v && (f == 0.0 || f.abs() >= f32::MIN_POSITIVE || !f.is_finite());
     let l = literal(v);
-    if exact || v.is_nan() {
+    if exact {
         format!("vec2<f32>({l}, {l})")
     } else {
         format!("iv_widen({l}, {l})")
@@ -246,12 +249,7 @@ pub fn emit_tape_interval<'a>(tape: &Tape, name: &str, buffer: impl Into<InputBu
     }
     code.push_str("    s0 = iv(lo.x, hi.x);\n    s1 = iv(lo.y, hi.y);\n    s2 = iv(lo.z, hi.z);\n");
     for &(slot, v) in tape.constants() {
-        let c = if v.is_nan() {
-            "iv_whole()".to_string()
-        } else {
-            constant(v)
-        };
-        code.push_str(&format!("    s{slot} = {c};\n"));
+        code.push_str(&format!("    s{slot} = {};\n", constant(v)));
     }
     let (reads, uniform_slots) = buffer_reads(tape, buffer.into(), base);
     for (slot, e) in reads {
